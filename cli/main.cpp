@@ -1,0 +1,4 @@
+// main.cpp — the vdb_shell executable: everything lives in run_cli() (cli/cli.h).
+#include "cli/cli.h"
+
+int main(int argc, char** argv) { return vdb_shell::run_cli(argc, argv); }

@@ -1,0 +1,45 @@
+// test_support.h — shared helpers of the test suite: temporary folders, the shared mesh corpus,
+// running the built executables.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+namespace vdb_shell::test {
+
+/// A fresh, empty folder under the system temp dir, removed when the object dies.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+  std::string file(const std::string& name) const { return (path_ / name).string(); }
+
+ private:
+  std::filesystem::path path_;
+};
+
+/// ../shared/meshes next to the repository, or empty when absent (tests then GTEST_SKIP).
+std::filesystem::path shared_meshes_dir();
+/// ../shared/eval/check_shell.py, or empty when absent.
+std::filesystem::path shared_checker();
+
+/// Result of running a command through the shell.
+struct CommandResult {
+  int exit_code = -1;
+  std::string out;  ///< stdout
+  std::string err;  ///< stderr
+};
+/// Runs `command` (a shell command line) and captures its stdout and stderr.
+CommandResult run_command(const std::string& command);
+
+/// Paths of the built executables.
+std::string vdb_shell_bin();
+std::string vdb_shell_shapes_bin();
+
+/// Writes `text` to `path` (binary, exact bytes).
+void write_text(const std::string& path, const std::string& text);
+
+}  // namespace vdb_shell::test
