@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -148,6 +149,71 @@ std::string check_stl_size(const std::string& path, std::uintmax_t size) {
   return {};
 }
 
+/// Vertex positions of an ASCII OBJ or OFF file, parsed in double precision (OpenMesh's readers
+/// store floats and skip coordinates they cannot parse, such as "nan").
+struct AsciiVertices {
+  std::vector<Vec3d> points;
+  std::vector<std::string> bad;  ///< "vertex 3 (line 5): 'nan 0 1'"
+  bool parsed = false;           ///< false when the format is not one we scan
+};
+
+bool parse_xyz(const std::string& text, Vec3d& p) {
+  const char* s = text.c_str();
+  for (int k = 0; k < 3; ++k) {
+    char* end = nullptr;
+    const double v = std::strtod(s, &end);
+    if (end == s) return false;
+    p[k] = v;
+    s = end;
+  }
+  return is_finite(p);
+}
+
+AsciiVertices scan_ascii_vertices(const std::string& path, const std::string& ext) {
+  AsciiVertices out;
+  std::ifstream in(path);
+  std::string line;
+  std::size_t line_no = 0;
+  auto add = [&](const std::string& coords) {
+    Vec3d p;
+    if (!parse_xyz(coords, p) && out.bad.size() < 3)
+      out.bad.push_back("vertex " + std::to_string(out.points.size()) + " (line " +
+                        std::to_string(line_no) + "): '" + coords.substr(0, 60) + "'");
+    out.points.push_back(p);
+  };
+  if (ext == ".obj") {
+    while (std::getline(in, line)) {
+      ++line_no;
+      std::size_t i = line.find_first_not_of(" \t");
+      if (i != std::string::npos && line.compare(i, 2, "v ") == 0) add(line.substr(i + 2));
+      if (i != std::string::npos && line.compare(i, 2, "v\t") == 0) add(line.substr(i + 2));
+    }
+    out.parsed = true;
+    return out;
+  }
+  // OFF: header keyword (OFF, COFF, NOFF, ...), counts, then one vertex per line.
+  std::vector<std::string> header;
+  long long nv = -1;
+  while (nv < 0 && std::getline(in, line)) {
+    ++line_no;
+    const std::size_t hash = line.find('#');
+    std::istringstream words(line.substr(0, hash));
+    std::string w;
+    while (words >> w) header.push_back(w);
+    if (!header.empty() && header[0].find("OFF") == std::string::npos) return out;
+    if (!header.empty() && line.find("BINARY") != std::string::npos) return out;
+    if (header.size() >= 4) nv = std::atoll(header[1].c_str());
+  }
+  while (nv > 0 && static_cast<long long>(out.points.size()) < nv && std::getline(in, line)) {
+    ++line_no;
+    const std::size_t first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#') continue;
+    add(line.substr(first));
+  }
+  out.parsed = true;
+  return out;
+}
+
 }  // namespace
 
 const std::vector<std::string>& supported_surface_extensions() {
@@ -193,6 +259,17 @@ PolygonSoup read_polygon_soup(const std::string& path) {
   if (!ok)
     throw InputError(path + ": not a readable " + ext.substr(1) + " file" + detail +
                      "; check that it is a complete, uncorrupted mesh file");
+  if (ext == ".obj" || ext == ".off") {
+    // Keep the file's double-precision coordinates and name unparsable ones.
+    AsciiVertices exact = scan_ascii_vertices(path, ext);
+    if (!exact.bad.empty()) {
+      std::string list;
+      for (const std::string& b : exact.bad) list += (list.empty() ? "" : "; ") + b;
+      throw InputError(path + ": NaN/Inf or unreadable vertex coordinates, first: " + list +
+                       " — fix: re-export the mesh with finite coordinates");
+    }
+    if (exact.parsed && exact.points.size() == soup.points.size()) soup.points = exact.points;
+  }
   if (soup.polygons.empty())
     throw InputError(path + ": holds no faces (" + std::to_string(soup.points.size()) +
                      " vertices)" + detail + "; vdb_shell needs a closed triangle surface");

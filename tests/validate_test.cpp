@@ -1,0 +1,326 @@
+// validate_test.cpp — every rule of the surface validator on tiny hand-made meshes, the readers
+// on every format, and the shared mesh corpus classified as its README says.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <string>
+
+#include "core/errors.h"
+#include "core/mesh_io.h"
+#include "core/validate.h"
+#include "tests/test_support.h"
+
+namespace vdb_shell {
+namespace {
+
+using test::TempDir;
+using test::write_text;
+
+const char* kCubeVertices =
+    "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n";
+// Outward-oriented faces (1-based), two triangles per side.
+const char* kCubeFaces[12] = {"f 1 3 2", "f 1 4 3", "f 5 6 7", "f 5 7 8", "f 1 2 6", "f 1 6 5",
+                              "f 2 3 7", "f 2 7 6", "f 3 4 8", "f 3 8 7", "f 4 1 5", "f 4 5 8"};
+
+std::string cube_obj(int skip = -1, const std::string& extra = "", int flip = -1) {
+  std::string s = kCubeVertices;
+  for (int i = 0; i < 12; ++i) {
+    if (i == skip) continue;
+    std::string f = kCubeFaces[i];
+    if (i == flip) {  // swap the last two indices
+      const std::size_t a = f.find(' ', 2), b = f.rfind(' ');
+      f = f.substr(0, a) + " " + f.substr(b + 1) + " " + f.substr(a + 1, b - a - 1);
+    }
+    s += f + "\n";
+  }
+  return s + extra;
+}
+
+/// Loads `text` saved as `name` and returns the InputError message ("" when it loads).
+std::string load_error(const std::string& name, const std::string& text) {
+  TempDir dir;
+  write_text(dir.file(name), text);
+  try {
+    load_surface(dir.file(name));
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+bool contains(const std::string& s, const std::string& part) {
+  return s.find(part) != std::string::npos;
+}
+
+TEST(Validate, CubeIsValidWithExactStats) {
+  TempDir dir;
+  write_text(dir.file("cube.obj"), cube_obj());
+  const LoadedSurface s = load_surface(dir.file("cube.obj"));
+  EXPECT_EQ(s.stats.vertices, 8u);
+  EXPECT_EQ(s.stats.faces, 12u);
+  EXPECT_EQ(s.stats.edges, 18u);
+  EXPECT_EQ(s.stats.components, 1u);
+  EXPECT_EQ(s.stats.genus, 0);
+  EXPECT_NEAR(s.stats.enclosed_volume, 1.0, 1e-12);
+  EXPECT_NEAR(s.stats.mean_edge_length, (12.0 + 6.0 * std::sqrt(2.0)) / 18.0, 1e-12);
+  EXPECT_FALSE(s.flipped);
+  EXPECT_EQ(s.stats.bbox.hi, Vec3d(1, 1, 1));
+}
+
+TEST(Validate, MissingFaceIsBoundary) {
+  const std::string e = load_error("open.obj", cube_obj(0));
+  EXPECT_TRUE(contains(e, "3 boundary edges")) << e;
+  EXPECT_TRUE(contains(e, "open.obj")) << e;
+  EXPECT_TRUE(contains(e, "edge (")) << e;
+}
+
+TEST(Validate, ThreeFacesOnOneEdgeIsNonManifold) {
+  // A fin: extra vertex 9 and two faces that hang a third and fourth face on edge (1, 3).
+  const std::string e = load_error("fin.obj", cube_obj(-1, "v 0.5 0.5 -1\nf 1 3 9\nf 3 1 9\n"));
+  EXPECT_TRUE(contains(e, "non-manifold edges")) << e;
+  EXPECT_TRUE(contains(e, "in 4 faces")) << e;
+}
+
+TEST(Validate, BowTieVertexIsNonManifold) {
+  // Two tetrahedra sharing only vertex 0.
+  const std::string text =
+      "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv -1 0 0\nv 0 -1 0\nv 0 0 -1\n"
+      "f 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n"
+      "f 1 6 5\nf 1 5 7\nf 5 6 7\nf 6 1 7\n";
+  const std::string e = load_error("bowtie.obj", text);
+  EXPECT_TRUE(contains(e, "non-manifold vertices")) << e;
+  EXPECT_TRUE(contains(e, "vertex 0 at (0, 0, 0)")) << e;
+}
+
+TEST(Validate, FlippedFaceIsInconsistent) {
+  const std::string e = load_error("flip.obj", cube_obj(-1, "", 3));
+  EXPECT_TRUE(contains(e, "inconsistently oriented")) << e;
+}
+
+TEST(Validate, NanVertexIsNamed) {
+  std::string text = cube_obj();
+  text.replace(text.find("v 1 1 1"), 7, "v 1 nan 1");
+  const std::string e = load_error("nan.obj", text);
+  EXPECT_TRUE(contains(e, "NaN/Inf")) << e;
+  EXPECT_TRUE(contains(e, "vertex 6")) << e;
+}
+
+TEST(Validate, NanInSoupIsNamed) {
+  PolygonSoup soup;
+  soup.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, NAN}};
+  soup.polygons = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {2, 0, 3}};
+  const auto problems = find_surface_problems(soup);
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_EQ(problems[0].rule, "NaN/Inf coordinates");
+  EXPECT_TRUE(contains(problems[0].first, "vertex 3")) << problems[0].first;
+}
+
+TEST(Validate, IndexOutOfRange) {
+  std::string text = cube_obj();
+  text.replace(text.find("f 4 5 8"), 7, "f 4 5 80");
+  const std::string e = load_error("range.obj", text);
+  EXPECT_TRUE(contains(e, "out-of-range")) << e;
+  EXPECT_TRUE(contains(e, "face 11")) << e;
+}
+
+TEST(Validate, DegenerateAndDuplicateFaces) {
+  PolygonSoup soup;
+  soup.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {2, 0, 0}};
+  soup.polygons = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {2, 0, 3}, {0, 1, 4}, {1, 2, 3}};
+  const auto problems = find_surface_problems(soup);
+  bool degenerate = false, duplicate = false;
+  for (const auto& p : problems) {
+    if (contains(p.rule, "degenerate")) degenerate = contains(p.first, "face 4");
+    if (contains(p.rule, "duplicate")) duplicate = contains(p.first, "face 5 repeats face 2");
+  }
+  EXPECT_TRUE(degenerate);
+  EXPECT_TRUE(duplicate);
+}
+
+TEST(Validate, InwardSurfaceIsFlippedWithNotice) {
+  PolygonSoup soup;
+  soup.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  soup.polygons = {{0, 1, 2}, {0, 3, 1}, {1, 3, 2}, {2, 3, 0}};  // all faces point inward
+  const LoadedSurface s = make_surface(soup, "tet");
+  EXPECT_TRUE(s.flipped);
+  ASSERT_EQ(s.notices.size(), 1u);
+  EXPECT_TRUE(contains(s.notices[0], "flipped"));
+  EXPECT_NEAR(s.stats.enclosed_volume, 1.0 / 6.0, 1e-12);
+}
+
+TEST(Validate, SeveralComponentsAndQuadsAreAllowed) {
+  // Two disjoint cubes written with quads.
+  std::string text;
+  for (int c = 0; c < 2; ++c)
+    for (int i = 0; i < 8; ++i)
+      text += "v " + std::to_string((i & 1) ^ ((i >> 1) & 1)) + " " +
+              std::to_string((i >> 1) & 1) + " " + std::to_string((i >> 2) + 3 * c) + "\n";
+  for (int c = 0; c < 2; ++c) {
+    const int o = 8 * c;
+    const int quads[6][4] = {{1, 4, 3, 2}, {5, 6, 7, 8}, {1, 2, 6, 5},
+                             {2, 3, 7, 6}, {3, 4, 8, 7}, {4, 1, 5, 8}};
+    for (const auto& q : quads)
+      text += "f " + std::to_string(q[0] + o) + " " + std::to_string(q[1] + o) + " " +
+              std::to_string(q[2] + o) + " " + std::to_string(q[3] + o) + "\n";
+  }
+  TempDir dir;
+  write_text(dir.file("two.obj"), text);
+  const LoadedSurface s = load_surface(dir.file("two.obj"));
+  EXPECT_EQ(s.stats.components, 2u);
+  EXPECT_EQ(s.stats.faces, 24u);
+  EXPECT_EQ(s.triangulated_polygons, 12u);
+  EXPECT_NEAR(s.stats.enclosed_volume, 2.0, 1e-12);
+}
+
+TEST(Validate, GenusOfATorusLikeBlock) {
+  // A 3x3x1 block of unit cells with the centre cell removed: genus 1 (built as quads).
+  PolygonSoup soup;
+  auto vid = [](int i, int j, int k) { return static_cast<std::int64_t>((k * 4 + j) * 4 + i); };
+  for (int k = 0; k < 2; ++k)
+    for (int j = 0; j < 4; ++j)
+      for (int i = 0; i < 4; ++i) soup.points.push_back({double(i), double(j), double(k)});
+  for (int j = 0; j < 3; ++j)
+    for (int i = 0; i < 3; ++i) {
+      if (i == 1 && j == 1) continue;
+      soup.polygons.push_back({vid(i, j, 0), vid(i, j + 1, 0), vid(i + 1, j + 1, 0), vid(i + 1, j, 0)});
+      soup.polygons.push_back({vid(i, j, 1), vid(i + 1, j, 1), vid(i + 1, j + 1, 1), vid(i, j + 1, 1)});
+    }
+  auto wall = [&](int i0, int j0, int i1, int j1) {  // outward = right of (i0,j0)->(i1,j1) seen from +z
+    soup.polygons.push_back({vid(i0, j0, 0), vid(i1, j1, 0), vid(i1, j1, 1), vid(i0, j0, 1)});
+  };
+  for (int i = 0; i < 3; ++i) { wall(i, 0, i + 1, 0); wall(i + 1, 3, i, 3); }
+  for (int j = 0; j < 3; ++j) { wall(3, j, 3, j + 1); wall(0, j + 1, 0, j); }
+  wall(1, 1, 1, 2); wall(1, 2, 2, 2); wall(2, 2, 2, 1); wall(2, 1, 1, 1);  // the hole, inward
+  const LoadedSurface s = make_surface(soup, "block");
+  EXPECT_EQ(s.stats.genus, 1);
+  EXPECT_NEAR(s.stats.enclosed_volume, 8.0, 1e-12);
+}
+
+TEST(Readers, EmptyFile) {
+  const std::string e = load_error("empty.obj", "");
+  EXPECT_TRUE(contains(e, "empty")) << e;
+}
+
+TEST(Readers, NotAMesh) {
+  const std::string e = load_error("text.off", "hello, this is not a mesh\n");
+  EXPECT_FALSE(e.empty());
+  EXPECT_TRUE(contains(e, "text.off")) << e;
+}
+
+TEST(Readers, UnknownExtensionAndMissingFile) {
+  EXPECT_TRUE(contains(load_error("a.xyz", "1 2 3\n"), "unknown surface format"));
+  EXPECT_THROW(load_surface("/nonexistent/file.obj"), InputError);
+}
+
+std::string binary_stl_tet(std::uint32_t announced, std::size_t keep_triangles) {
+  const float p[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  const int f[4][3] = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {2, 0, 3}};
+  std::string s(80, ' ');
+  s.append(reinterpret_cast<const char*>(&announced), 4);
+  for (std::size_t t = 0; t < keep_triangles; ++t) {
+    const float n[3] = {0, 0, 0};
+    s.append(reinterpret_cast<const char*>(n), 12);
+    for (int k = 0; k < 3; ++k) s.append(reinterpret_cast<const char*>(p[f[t][k]]), 12);
+    s.append(2, '\0');
+  }
+  return s;
+}
+
+TEST(Readers, BinaryStlAndTruncatedBinaryStl) {
+  TempDir dir;
+  write_text(dir.file("tet.stl"), binary_stl_tet(4, 4));
+  const LoadedSurface s = load_surface(dir.file("tet.stl"));
+  EXPECT_EQ(s.stats.vertices, 4u);  // STL corners are welded by position
+  EXPECT_NEAR(s.stats.enclosed_volume, 1.0 / 6.0, 1e-7);
+  std::string cut = binary_stl_tet(4, 4);
+  cut.resize(cut.size() - 30);
+  const std::string e = load_error("cut.stl", cut);
+  EXPECT_TRUE(contains(e, "truncated")) << e;
+}
+
+TEST(Readers, AsciiStlOffPlyAgree) {
+  TempDir dir;
+  write_text(dir.file("t.stl"),
+             "solid t\n"
+             "facet normal 0 0 -1\nouter loop\nvertex 0 0 0\nvertex 0 1 0\nvertex 1 0 0\nendloop\nendfacet\n"
+             "facet normal 0 -1 0\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 0 1\nendloop\nendfacet\n"
+             "facet normal 1 1 1\nouter loop\nvertex 1 0 0\nvertex 0 1 0\nvertex 0 0 1\nendloop\nendfacet\n"
+             "facet normal -1 0 0\nouter loop\nvertex 0 1 0\nvertex 0 0 0\nvertex 0 0 1\nendloop\nendfacet\n"
+             "endsolid t\n");
+  write_text(dir.file("t.off"), "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n"
+                                "3 0 2 1\n3 0 1 3\n3 1 2 3\n3 2 0 3\n");
+  write_text(dir.file("t.ply"),
+             "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+             "property float z\nelement face 4\nproperty list uchar int vertex_indices\n"
+             "end_header\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 1 2 3\n3 2 0 3\n");
+  for (const char* name : {"t.stl", "t.off", "t.ply"}) {
+    const LoadedSurface s = load_surface(dir.file(name));
+    EXPECT_EQ(s.stats.faces, 4u) << name;
+    EXPECT_NEAR(s.stats.enclosed_volume, 1.0 / 6.0, 1e-7) << name;
+  }
+}
+
+TEST(Readers, ObjAndOffKeepDoublePrecision) {
+  TempDir dir;
+  write_text(dir.file("t.obj"), "v 0.12345678901234567 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
+                                "f 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n");
+  EXPECT_EQ(read_polygon_soup(dir.file("t.obj")).points[0].x, 0.12345678901234567);
+  write_text(dir.file("t.off"), "OFF\n4 4 0\n0.12345678901234567 0 0\n1 0 0\n0 1 0\n0 0 1\n"
+                                "3 0 2 1\n3 0 1 3\n3 1 2 3\n3 2 0 3\n");
+  EXPECT_EQ(read_polygon_soup(dir.file("t.off")).points[0].x, 0.12345678901234567);
+}
+
+// The shared corpus, classified as ../shared/meshes/README.md says.
+TEST(Corpus, SharedMeshesClassifiedAsDocumented) {
+  const auto dir = test::shared_meshes_dir();
+  if (dir.empty()) GTEST_SKIP() << "../shared/meshes is absent";
+  struct Expect { const char* file; bool valid; std::size_t faces; int genus; };
+  const Expect expected[] = {{"fandisk.obj", true, 12946, 0},
+                             {"decimated-knight.off", true, 1000, 0},
+                             {"fertility.off", true, 9000, 4},
+                             {"spot.obj", true, 5856, 0},
+                             {"suzanne.obj", false, 0, 0},
+                             {"teapot.obj", false, 0, 0}};
+  for (const Expect& e : expected) {
+    const std::string path = (dir / e.file).string();
+    if (e.valid) {
+      const LoadedSurface s = load_surface(path);
+      EXPECT_EQ(s.stats.faces, e.faces) << e.file;
+      EXPECT_EQ(s.stats.genus, e.genus) << e.file;
+      EXPECT_EQ(s.stats.components, 1u) << e.file;
+      EXPECT_GT(s.stats.enclosed_volume, 0.0) << e.file;
+      EXPECT_FALSE(s.flipped) << e.file;
+    } else {
+      try {
+        load_surface(path);
+        ADD_FAILURE() << e.file << " was accepted";
+      } catch (const InputError& err) {
+        EXPECT_TRUE(contains(err.what(), "boundary edges")) << err.what();
+      }
+    }
+  }
+  // The README's exact counts for the two broken meshes.
+  const auto suzanne = find_surface_problems(read_polygon_soup((dir / "suzanne.obj").string()));
+  std::size_t boundary = 0, nm_edges = 0, dup = 0;
+  for (const auto& p : suzanne) {
+    if (contains(p.rule, "boundary")) boundary = p.count;
+    if (contains(p.rule, "non-manifold edges")) nm_edges = p.count;
+    if (contains(p.rule, "duplicate")) dup = p.count;
+  }
+  EXPECT_EQ(boundary, 42u);
+  EXPECT_EQ(nm_edges, 1u);
+  EXPECT_EQ(dup, 1u);
+  const auto teapot = find_surface_problems(read_polygon_soup((dir / "teapot.obj").string()));
+  std::size_t teapot_boundary = 0, teapot_nm_vertices = 0;
+  for (const auto& p : teapot) {
+    if (contains(p.rule, "boundary")) teapot_boundary = p.count;
+    if (contains(p.rule, "non-manifold vertices")) teapot_nm_vertices = p.count;
+  }
+  EXPECT_EQ(teapot_boundary, 1036u);
+  EXPECT_EQ(teapot_nm_vertices, 38u);
+}
+
+}  // namespace
+}  // namespace vdb_shell
