@@ -2,7 +2,7 @@
 //
 // Conventions: coordinates in world units (the input's); every tet (a, b, c, d) is positively
 // oriented: tet_volume(a, b, c, d) > 0, i.e. (a, b, c) counter-clockwise seen from outside the
-// tet, the convention of VTK, Gmsh (and TetGen after its own reordering in the writer).
+// tet, the convention of VTK, Gmsh and TetGen alike.
 #pragma once
 
 #include <array>
