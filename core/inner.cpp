@@ -1,0 +1,92 @@
+// inner.cpp — thickness limits and welding; see inner.h.
+#include "core/inner.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/errors.h"
+
+namespace vdb_shell {
+
+Vec3d point_at_arc(const TraceResult& t, std::size_t v, double s) {
+  const std::size_t first = t.offsets[v], last = first + t.end[v];
+  if (s >= t.arc_length[last]) return t.samples[last];
+  if (s <= 0.0) return t.samples[first];
+  const auto begin = t.arc_length.begin() + static_cast<std::ptrdiff_t>(first);
+  const auto end = t.arc_length.begin() + static_cast<std::ptrdiff_t>(last) + 1;
+  const std::size_t i = static_cast<std::size_t>(std::upper_bound(begin, end, s) - begin) + first;
+  const double a0 = t.arc_length[i - 1], a1 = t.arc_length[i];
+  const double w = a1 > a0 ? (s - a0) / (a1 - a0) : 1.0;
+  return t.samples[i - 1] * (1.0 - w) + t.samples[i] * w;
+}
+
+InnerVertices place_inner_vertices(const SurfaceMesh& mesh, const TraceResult& traces,
+                                   const ThicknessOptions& options,
+                                   const PointIndexFactory& make_index) {
+  if (!(options.max_thickness >= 0.0) || !std::isfinite(options.max_thickness))
+    throw InputError("--max-thickness must be a finite length >= 0 (0: no limit)");
+  if (!(options.edge_factor >= 0.0) || !std::isfinite(options.edge_factor))
+    throw InputError("--thickness-edge-factor must be a finite number >= 0 (0: no limit)");
+  const std::size_t n = mesh.points.size();
+
+  std::vector<double> limit(n, INFINITY);
+  if (options.max_thickness > 0.0) std::fill(limit.begin(), limit.end(), options.max_thickness);
+  if (options.edge_factor > 0.0) {
+    std::vector<double> sum(n, 0.0);
+    std::vector<int> count(n, 0);
+    for (const Triangle& t : mesh.triangles)
+      for (int k = 0; k < 3; ++k) {  // each edge is seen from both of its faces: halves cancel
+        const double l = distance(mesh.points[t[k]], mesh.points[t[(k + 1) % 3]]);
+        sum[t[k]] += l;
+        sum[t[(k + 1) % 3]] += l;
+        count[t[k]] += 1;
+        count[t[(k + 1) % 3]] += 1;
+      }
+    for (std::size_t v = 0; v < n; ++v)
+      if (count[v]) limit[v] = std::min(limit[v], options.edge_factor * sum[v] / count[v]);
+  }
+
+  InnerVertices out;
+  out.arc.resize(n);
+  std::vector<Vec3d> ends(n);
+  for (std::size_t v = 0; v < n; ++v) {
+    const double full = traces.end_arc(v);
+    out.arc[v] = std::min(full, limit[v]);
+    if (out.arc[v] < full) ++out.limited;
+    ends[v] = point_at_arc(traces, v, out.arc[v]);
+  }
+
+  const double tol = options.weld_tolerance < 0.0 ? 0.5 * traces.parameters.point_size
+                                                  : options.weld_tolerance;
+  std::vector<std::uint32_t> rep(n);
+  for (std::uint32_t v = 0; v < n; ++v) rep[v] = v;
+  if (tol > 0.0 && n > 0) {
+    const std::unique_ptr<PointIndex> index = make_index(ends, tol);
+    std::vector<std::uint32_t> near;
+    for (std::uint32_t v = 0; v < n; ++v) {
+      // Only points that moved off the surface weld: the surface itself stays as it is.
+      if (out.arc[v] <= 0.0) continue;
+      index->find_within(ends[v], tol, near);
+      for (std::uint32_t u : near) {
+        if (u >= v) break;
+        if (rep[u] == u && out.arc[u] > 0.0) {
+          rep[v] = u;
+          ++out.welded;
+          break;
+        }
+      }
+    }
+  }
+  out.input.inner_id.assign(n, 0);
+  std::vector<std::uint32_t> compact(n, UINT32_MAX);
+  for (std::uint32_t v = 0; v < n; ++v) {
+    if (rep[v] == v) {
+      compact[v] = static_cast<std::uint32_t>(out.input.inner_points.size());
+      out.input.inner_points.push_back(ends[v]);
+    }
+    out.input.inner_id[v] = compact[rep[v]];
+  }
+  return out;
+}
+
+}  // namespace vdb_shell

@@ -1,0 +1,698 @@
+// shell_checks.cpp — see shell_checks.h.
+//
+// Methods:
+//   * point in surface: parity of the crossings of an axis-parallel ray, found in a 2D grid of
+//     the triangles' projections (one grid per axis). A ray that passes within the tolerance of
+//     a triangle edge is ambiguous and the next axis is tried; after three ambiguous axes the
+//     generalized winding number over all triangles decides. Points within the tolerance of a
+//     triangle (exact point-triangle distance) are on the surface.
+//   * tet-tet overlap: a uniform grid (cells about the size of a cube of the mean tet volume) in
+//     which every tet enters the cells its face planes do not separate from it; the pairs of
+//     tets sharing a cell, with overlapping boxes, go to the separating axis theorem with the
+//     4 + 4 face normals and the 36 edge-edge cross products.
+//   * boundary faces: the 4T tet faces sorted by their vertex triples.
+#include "core/shell_checks.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+#include "core/errors.h"
+#include "core/parallel.h"
+
+namespace vdb_shell {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Corners of the outward-oriented face opposite corner k of a positive tet.
+constexpr int kOutwardFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+// The six edges of a tet, as corner pairs.
+constexpr int kTetEdge[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void list_item(std::vector<std::uint32_t>& list, std::size_t max_listed, std::size_t item) {
+  if (list.size() < max_listed) list.push_back(static_cast<std::uint32_t>(item));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Point in closed surface.
+
+// Squared distance from p to triangle (a, b, c) (Ericson, Real-Time Collision Detection 5.1.5).
+double point_triangle_distance2(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  const Vec3d ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = dot(ab, ap), d2 = dot(ac, ap);
+  if (d1 <= 0.0 && d2 <= 0.0) return norm2(ap);
+  const Vec3d bp = p - b;
+  const double d3 = dot(ab, bp), d4 = dot(ac, bp);
+  if (d3 >= 0.0 && d4 <= d3) return norm2(bp);
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return norm2(ap - ab * (d1 / (d1 - d3)));
+  const Vec3d cp = p - c;
+  const double d5 = dot(ab, cp), d6 = dot(ac, cp);
+  if (d6 >= 0.0 && d5 <= d6) return norm2(cp);
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return norm2(ap - ac * (d2 / (d2 - d6)));
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0)
+    return norm2(bp - (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6))));
+  const double denom = va + vb + vc;
+  if (!(denom != 0.0)) return std::min({norm2(ap), norm2(bp), norm2(cp)});
+  const double v = vb / denom, w = vc / denom;
+  return norm2(ap - ab * v - ac * w);
+}
+
+// Solid angle of triangle (a, b, c) seen from p, signed (Van Oosterom and Strackee 1983).
+double solid_angle(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  const Vec3d x = a - p, y = b - p, z = c - p;
+  const double lx = norm(x), ly = norm(y), lz = norm(z);
+  const double num = dot(x, cross(y, z));
+  const double den = lx * ly * lz + dot(x, y) * lz + dot(y, z) * lx + dot(z, x) * ly;
+  return 2.0 * std::atan2(num, den);
+}
+
+enum class RayVerdict { kInside, kOutside, kOnSurface, kAmbiguous };
+
+class InsideTester {
+ public:
+  InsideTester(const SurfaceMesh& surface, double tolerance)
+      : surface_(surface), tolerance_(tolerance) {
+    for (int axis = 0; axis < 3; ++axis) build(axis);
+  }
+
+  bool outside(const Vec3d& p) const {
+    for (int axis = 0; axis < 3; ++axis) {
+      switch (cast_ray(axis, p)) {
+        case RayVerdict::kInside:
+        case RayVerdict::kOnSurface:
+          return false;
+        case RayVerdict::kOutside:
+          return true;
+        case RayVerdict::kAmbiguous:
+          break;
+      }
+    }
+    double winding = 0.0;
+    for (const Triangle& t : surface_.triangles)
+      winding += solid_angle(p, surface_.points[t[0]], surface_.points[t[1]],
+                             surface_.points[t[2]]);
+    return std::abs(winding) < 2.0 * kPi;  // |winding number| < 1/2
+  }
+
+ private:
+  // Triangles listed per cell of the projection along `axis` onto coordinates (u, v).
+  struct ColumnGrid {
+    int u = 1, v = 2;
+    double lo_u = 0.0, lo_v = 0.0, inv_cell = 1.0;
+    long nu = 1, nv = 1;
+    std::vector<std::uint32_t> start;  // nu * nv + 1
+    std::vector<std::uint32_t> items;
+    long cell_u(double x) const {
+      return std::clamp(static_cast<long>(std::floor((x - lo_u) * inv_cell)), 0L, nu - 1);
+    }
+    long cell_v(double x) const {
+      return std::clamp(static_cast<long>(std::floor((x - lo_v) * inv_cell)), 0L, nv - 1);
+    }
+  };
+
+  void build(int axis) {
+    ColumnGrid& g = grids_[axis];
+    g.u = (axis + 1) % 3;
+    g.v = (axis + 2) % 3;
+    const BBox box = bounding_box(surface_);
+    const std::size_t n_faces = surface_.triangles.size();
+    if (box.empty() || n_faces == 0) {
+      g.start.assign(2, 0);
+      return;
+    }
+    const double eps = tolerance_;
+    g.lo_u = box.lo[g.u] - eps;
+    g.lo_v = box.lo[g.v] - eps;
+    const double ext_u = box.hi[g.u] - box.lo[g.u] + 2 * eps;
+    const double ext_v = box.hi[g.v] - box.lo[g.v] + 2 * eps;
+    // About one triangle per cell, at most 2048 cells a side.
+    double cell = std::sqrt(ext_u * ext_v / static_cast<double>(n_faces));
+    cell = std::max({cell, ext_u / 2048.0, ext_v / 2048.0});
+    if (!(cell > 0.0)) cell = std::max({ext_u, ext_v, 1.0});
+    g.inv_cell = 1.0 / cell;
+    g.nu = std::clamp(static_cast<long>(std::ceil(ext_u / cell)), 1L, 2048L);
+    g.nv = std::clamp(static_cast<long>(std::ceil(ext_v / cell)), 1L, 2048L);
+
+    std::vector<std::array<long, 4>> range(n_faces);  // cell ranges per triangle
+    g.start.assign(static_cast<std::size_t>(g.nu * g.nv) + 1, 0);
+    for (std::size_t f = 0; f < n_faces; ++f) {
+      const Triangle& t = surface_.triangles[f];
+      double lu = INFINITY, hu = -INFINITY, lv = INFINITY, hv = -INFINITY;
+      for (const std::uint32_t i : t) {
+        lu = std::min(lu, surface_.points[i][g.u]);
+        hu = std::max(hu, surface_.points[i][g.u]);
+        lv = std::min(lv, surface_.points[i][g.v]);
+        hv = std::max(hv, surface_.points[i][g.v]);
+      }
+      range[f] = {g.cell_u(lu - eps), g.cell_u(hu + eps), g.cell_v(lv - eps), g.cell_v(hv + eps)};
+      for (long iu = range[f][0]; iu <= range[f][1]; ++iu)
+        for (long iv = range[f][2]; iv <= range[f][3]; ++iv)
+          ++g.start[static_cast<std::size_t>(iu * g.nv + iv) + 1];
+    }
+    for (std::size_t c = 1; c < g.start.size(); ++c) g.start[c] += g.start[c - 1];
+    g.items.resize(g.start.back());
+    std::vector<std::uint32_t> fill(g.start.begin(), g.start.end() - 1);
+    for (std::size_t f = 0; f < n_faces; ++f)
+      for (long iu = range[f][0]; iu <= range[f][1]; ++iu)
+        for (long iv = range[f][2]; iv <= range[f][3]; ++iv)
+          g.items[fill[static_cast<std::size_t>(iu * g.nv + iv)]++] =
+              static_cast<std::uint32_t>(f);
+  }
+
+  // Parity of the crossings of the ray from p towards +axis.
+  RayVerdict cast_ray(int axis, const Vec3d& p) const {
+    const ColumnGrid& g = grids_[axis];
+    const double eps = tolerance_;
+    const double pu = p[g.u], pv = p[g.v], pz = p[axis];
+    if (pu < g.lo_u || pv < g.lo_v || pu > g.lo_u + static_cast<double>(g.nu) / g.inv_cell ||
+        pv > g.lo_v + static_cast<double>(g.nv) / g.inv_cell)
+      return RayVerdict::kOutside;
+    const std::size_t cell = static_cast<std::size_t>(g.cell_u(pu) * g.nv + g.cell_v(pv));
+    int crossings = 0;
+    bool ambiguous = false;
+    for (std::uint32_t k = g.start[cell]; k < g.start[cell + 1]; ++k) {
+      const Triangle& t = surface_.triangles[g.items[k]];
+      const Vec3d& a = surface_.points[t[0]];
+      const Vec3d& b = surface_.points[t[1]];
+      const Vec3d& c = surface_.points[t[2]];
+      const Vec3d lo = min_of(a, min_of(b, c)), hi = max_of(a, max_of(b, c));
+      if (hi[axis] + eps < pz) continue;  // entirely behind the ray's origin
+      if (p.x >= lo.x - eps && p.x <= hi.x + eps && p.y >= lo.y - eps && p.y <= hi.y + eps &&
+          p.z >= lo.z - eps && p.z <= hi.z + eps &&
+          point_triangle_distance2(p, a, b, c) <= eps * eps)
+        return RayVerdict::kOnSurface;
+      if (ambiguous) continue;  // only an on-surface hit can still decide
+      // Signed distances (2D) of the projected point from the projected edges, positive inside.
+      const double au = a[g.u], av = a[g.v], bu = b[g.u], bv = b[g.v], cu = c[g.u], cv = c[g.v];
+      const double d = (bu - au) * (cv - av) - (bv - av) * (cu - au);
+      const double l_bc = std::hypot(cu - bu, cv - bv), l_ca = std::hypot(au - cu, av - cv),
+                   l_ab = std::hypot(bu - au, bv - av);
+      const double l_max = std::max({l_bc, l_ca, l_ab});
+      if (std::abs(d) <= eps * l_max) {
+        // Seen edge-on: the ray may graze it.
+        if (pu >= lo[g.u] - eps && pu <= hi[g.u] + eps && pv >= lo[g.v] - eps &&
+            pv <= hi[g.v] + eps)
+          ambiguous = true;
+        continue;
+      }
+      const double s = d > 0.0 ? 1.0 : -1.0;
+      const double w0 = (cu - bu) * (pv - bv) - (cv - bv) * (pu - bu);
+      const double w1 = (au - cu) * (pv - cv) - (av - cv) * (pu - cu);
+      const double w2 = (bu - au) * (pv - av) - (bv - av) * (pu - au);
+      const double e0 = s * w0 / l_bc, e1 = s * w1 / l_ca, e2 = s * w2 / l_ab;
+      const double e_min = std::min({e0, e1, e2});
+      if (e_min < -eps) continue;
+      const double z = (w0 * a[axis] + w1 * b[axis] + w2 * c[axis]) / d;
+      if (z <= pz) continue;
+      if (e_min <= eps) {
+        ambiguous = true;
+        continue;
+      }
+      ++crossings;
+    }
+    if (ambiguous) return RayVerdict::kAmbiguous;
+    return crossings % 2 == 1 ? RayVerdict::kInside : RayVerdict::kOutside;
+  }
+
+  const SurfaceMesh& surface_;
+  double tolerance_;
+  ColumnGrid grids_[3];
+};
+
+// ---------------------------------------------------------------------------------------------
+// Tet-tet overlap.
+
+struct TetGeometry {
+  std::array<Vec3d, 4> p;
+  std::array<Vec3d, 4> n;      // unit normal of the face opposite corner k (0 if degenerate)
+  std::array<double, 4> lo{};  // extent of the tet along n[k]
+  std::array<double, 4> hi{};
+  double max_edge = 0.0;
+  BBox box;
+};
+
+TetGeometry tet_geometry(const std::array<Vec3d, 4>& p) {
+  TetGeometry g;
+  g.p = p;
+  for (const Vec3d& x : p) g.box.expand(x);
+  for (const auto& e : kTetEdge) g.max_edge = std::max(g.max_edge, distance(p[e[0]], p[e[1]]));
+  for (int k = 0; k < 4; ++k) {
+    const Vec3d& u = p[(k + 1) % 4];
+    const Vec3d m = cross(p[(k + 2) % 4] - u, p[(k + 3) % 4] - u);
+    const double len = norm(m);
+    g.n[k] = len > 0.0 ? m / len : Vec3d{};
+    g.lo[k] = g.hi[k] = dot(g.n[k], u);
+    const double opposite = dot(g.n[k], p[k]);
+    g.lo[k] = std::min(g.lo[k], opposite);
+    g.hi[k] = std::max(g.hi[k], opposite);
+  }
+  return g;
+}
+
+bool separated_on(const Vec3d& axis, double a_lo, double a_hi, const std::array<Vec3d, 4>& q,
+                  double tolerance) {
+  double b_lo = dot(axis, q[0]), b_hi = b_lo;
+  for (int k = 1; k < 4; ++k) {
+    const double x = dot(axis, q[k]);
+    b_lo = std::min(b_lo, x);
+    b_hi = std::max(b_hi, x);
+  }
+  return b_hi <= a_lo + tolerance || a_hi <= b_lo + tolerance;
+}
+
+bool geometries_overlap(const TetGeometry& a, const TetGeometry& b, double tolerance) {
+  for (int k = 0; k < 4; ++k)
+    if (norm2(a.n[k]) > 0.0 && separated_on(a.n[k], a.lo[k], a.hi[k], b.p, tolerance))
+      return false;
+  for (int k = 0; k < 4; ++k)
+    if (norm2(b.n[k]) > 0.0 && separated_on(b.n[k], b.lo[k], b.hi[k], a.p, tolerance))
+      return false;
+  for (const auto& ea : kTetEdge) {
+    const Vec3d da = a.p[ea[1]] - a.p[ea[0]];
+    for (const auto& eb : kTetEdge) {
+      const Vec3d db = b.p[eb[1]] - b.p[eb[0]];
+      const Vec3d m = cross(da, db);
+      const double len2 = norm2(m);
+      if (!(len2 > 1e-24 * norm2(da) * norm2(db))) continue;  // (nearly) parallel edges
+      const Vec3d axis = m / std::sqrt(len2);
+      double a_lo = dot(axis, a.p[0]), a_hi = a_lo;
+      for (int k = 1; k < 4; ++k) {
+        const double x = dot(axis, a.p[k]);
+        a_lo = std::min(a_lo, x);
+        a_hi = std::max(a_hi, x);
+      }
+      if (separated_on(axis, a_lo, a_hi, b.p, tolerance)) return false;
+    }
+  }
+  return true;
+}
+
+bool boxes_overlap(const BBox& a, const BBox& b) {
+  return a.lo.x <= b.hi.x && b.lo.x <= a.hi.x && a.lo.y <= b.hi.y && b.lo.y <= a.hi.y &&
+         a.lo.z <= b.hi.z && b.lo.z <= a.hi.z;
+}
+
+// Per tet i: the tets j > i that overlap it.
+struct OverlapSlot {
+  std::vector<std::uint32_t> partners;
+  std::uint32_t candidates = 0;
+};
+
+// A uniform grid in which every tet is entered in the cells it may intersect: the cells of its
+// bounding box that no face plane of the tet separates from it (conservative).
+class TetGrid {
+ public:
+  TetGrid(const std::vector<TetGeometry>& geo, double cell_size) : geo_(geo) {
+    for (const TetGeometry& g : geo) {
+      box_.expand(g.box.lo);
+      box_.expand(g.box.hi);
+    }
+    cell_ = cell_size;
+    inv_cell_ = 1.0 / cell_;
+    for (int a = 0; a < 3; ++a)
+      dims_[a] = std::max(1L, static_cast<long>(std::ceil((box_.hi[a] - box_.lo[a]) * inv_cell_)));
+  }
+
+  // Cells of tet t, appended to `out` (increasing order); returns how many.
+  std::size_t cells_of(std::size_t t, std::uint32_t* out) const {
+    const TetGeometry& g = geo_[t];
+    long lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = cell_of(g.box.lo[a], a);
+      hi[a] = cell_of(g.box.hi[a], a);
+    }
+    const double r = 0.5 * cell_;
+    std::size_t count = 0;
+    for (long i = lo[0]; i <= hi[0]; ++i)
+      for (long j = lo[1]; j <= hi[1]; ++j)
+        for (long k = lo[2]; k <= hi[2]; ++k) {
+          const Vec3d centre = box_.lo + Vec3d{(static_cast<double>(i) + 0.5) * cell_,
+                                               (static_cast<double>(j) + 0.5) * cell_,
+                                               (static_cast<double>(k) + 0.5) * cell_};
+          bool separated = false;
+          for (int f = 0; f < 4 && !separated; ++f) {
+            const Vec3d& n = g.n[f];
+            const double c = dot(n, centre);
+            const double reach = r * (std::abs(n.x) + std::abs(n.y) + std::abs(n.z));
+            separated = c - reach > g.hi[f] || c + reach < g.lo[f];
+          }
+          if (separated) continue;
+          if (out) out[count] = static_cast<std::uint32_t>((i * dims_[1] + j) * dims_[2] + k);
+          ++count;
+        }
+    return count;
+  }
+
+  std::size_t bbox_cells(std::size_t t) const {
+    const TetGeometry& g = geo_[t];
+    std::size_t count = 1;
+    for (int a = 0; a < 3; ++a)
+      count *= static_cast<std::size_t>(cell_of(g.box.hi[a], a) - cell_of(g.box.lo[a], a) + 1);
+    return count;
+  }
+
+  std::size_t num_cells() const {
+    return static_cast<std::size_t>(dims_[0]) * static_cast<std::size_t>(dims_[1]) *
+           static_cast<std::size_t>(dims_[2]);
+  }
+
+ private:
+  long cell_of(double x, int a) const {
+    return std::clamp(static_cast<long>(std::floor((x - box_.lo[a]) * inv_cell_)), 0L,
+                      dims_[a] - 1);
+  }
+
+  const std::vector<TetGeometry>& geo_;
+  BBox box_;
+  double cell_ = 1.0, inv_cell_ = 1.0;
+  long dims_[3] = {1, 1, 1};
+};
+
+// Cell size: about the edge of a cube of the mean tet volume, so that slivers enter few cells,
+// made larger until the grid has at most 32 cells per tet and the tets' boxes span at most 64
+// cells each on average.
+double grid_cell_size(const std::vector<TetGeometry>& geo) {
+  const double n = static_cast<double>(geo.size());
+  BBox all;
+  double mean_volume = 0.0, mean_side = 0.0;
+  for (const TetGeometry& g : geo) {
+    all.expand(g.box.lo);
+    all.expand(g.box.hi);
+    mean_volume += std::abs(tet_volume(g.p[0], g.p[1], g.p[2], g.p[3])) / n;
+    const Vec3d e = g.box.extent();
+    mean_side += (e.x + e.y + e.z) / (3.0 * n);
+  }
+  double h = std::max(1.5 * std::cbrt(mean_volume), mean_side / 8.0);
+  if (!(h > 0.0)) h = all.max_side() > 0.0 ? all.max_side() : 1.0;
+  const Vec3d ext = all.extent();
+  for (int round = 0; round < 200; ++round) {
+    const double cells = std::ceil(ext.x / h + 1e-9) * std::ceil(ext.y / h + 1e-9) *
+                         std::ceil(ext.z / h + 1e-9);
+    double spanned = 0.0;
+    for (const TetGeometry& g : geo) {
+      const Vec3d e = g.box.extent();
+      spanned += (std::floor(e.x / h) + 2.0) * (std::floor(e.y / h) + 2.0) *
+                 (std::floor(e.z / h) + 2.0);
+    }
+    if (cells <= 32.0 * n + 64.0 && spanned <= 64.0 * n) break;
+    h *= 1.25;
+  }
+  return h;
+}
+
+void check_overlaps(const TetMesh& mesh, const ShellCheckOptions& options,
+                    ShellCheckResult& result) {
+  const std::size_t n = mesh.tets.size();
+  if (n < 2) return;
+  std::vector<TetGeometry> geo(n);
+  for_each_chunk(
+      n,
+      [&](std::size_t begin, std::size_t end) {
+        for (std::size_t t = begin; t != end; ++t) {
+          const Tet& v = mesh.tets[t];
+          geo[t] = tet_geometry(
+              {mesh.points[v[0]], mesh.points[v[1]], mesh.points[v[2]], mesh.points[v[3]]});
+        }
+      },
+      1024);
+
+  // Broad phase: tet -> cells, then cell -> tets (tets in increasing order in every cell).
+  const TetGrid grid(geo, grid_cell_size(geo));
+  std::vector<std::uint64_t> tet_start(n + 1, 0);
+  for_each_index(n, [&](std::size_t t) { tet_start[t + 1] = grid.cells_of(t, nullptr); });
+  for (std::size_t t = 0; t < n; ++t) tet_start[t + 1] += tet_start[t];
+  std::vector<std::uint32_t> tet_cells(tet_start[n]);
+  for_each_index(n, [&](std::size_t t) { grid.cells_of(t, tet_cells.data() + tet_start[t]); });
+  std::vector<std::uint64_t> cell_start(grid.num_cells() + 1, 0);
+  for (const std::uint32_t c : tet_cells) ++cell_start[c + 1];
+  for (std::size_t c = 0; c < grid.num_cells(); ++c) cell_start[c + 1] += cell_start[c];
+  std::vector<std::uint32_t> cell_tets(tet_cells.size());
+  {
+    std::vector<std::uint64_t> fill(cell_start.begin(), cell_start.end() - 1);
+    for (std::size_t t = 0; t < n; ++t)
+      for (std::uint64_t k = tet_start[t]; k < tet_start[t + 1]; ++k)
+        cell_tets[fill[tet_cells[k]]++] = static_cast<std::uint32_t>(t);
+  }
+
+  // Narrow phase: every tet against the later tets sharing one of its cells.
+  std::vector<OverlapSlot> slots(n);
+  for_each_chunk(
+      n,
+      [&](std::size_t begin, std::size_t end) {
+        std::vector<std::uint32_t> candidates;
+        for (std::size_t t = begin; t != end; ++t) {
+          candidates.clear();
+          for (std::uint64_t k = tet_start[t]; k < tet_start[t + 1]; ++k) {
+            const std::uint32_t c = tet_cells[k];
+            const std::uint32_t* first = cell_tets.data() + cell_start[c];
+            const std::uint32_t* last = cell_tets.data() + cell_start[c + 1];
+            for (const std::uint32_t* u = std::upper_bound(first, last, t); u != last; ++u)
+              candidates.push_back(*u);
+          }
+          std::sort(candidates.begin(), candidates.end());
+          candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+          const TetGeometry& a = geo[t];
+          OverlapSlot& slot = slots[t];
+          for (const std::uint32_t u : candidates) {
+            const TetGeometry& b = geo[u];
+            if (!boxes_overlap(a.box, b.box)) continue;
+            ++slot.candidates;
+            const double tol = options.overlap_tolerance * std::max(a.max_edge, b.max_edge);
+            if (geometries_overlap(a, b, tol)) slot.partners.push_back(u);
+          }
+        }
+      },
+      64);
+  for (std::size_t t = 0; t < n; ++t) {
+    OverlapSlot& slot = slots[t];
+    result.overlap_candidate_pairs += slot.candidates;
+    result.overlapping_pairs += slot.partners.size();
+    for (const std::uint32_t u : slot.partners)
+      if (result.first_overlapping_pairs.size() < options.max_listed)
+        result.first_overlapping_pairs.push_back({static_cast<std::uint32_t>(t), u});
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Boundary faces.
+
+struct FaceRecord {
+  std::array<std::uint32_t, 3> key;  // sorted vertex indices
+  std::uint32_t tet;
+  std::uint8_t face;  // corner of the tet opposite the face
+  bool operator<(const FaceRecord& o) const {
+    return key != o.key ? key < o.key : (tet != o.tet ? tet < o.tet : face < o.face);
+  }
+};
+
+std::array<std::uint32_t, 3> sorted3(std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+  std::array<std::uint32_t, 3> k = {a, b, c};
+  std::sort(k.begin(), k.end());
+  return k;
+}
+
+bool same_cycle(const std::array<std::uint32_t, 3>& x, const Triangle& y) {
+  for (int r = 0; r < 3; ++r)
+    if (x[0] == y[r] && x[1] == y[(r + 1) % 3] && x[2] == y[(r + 2) % 3]) return true;
+  return false;
+}
+
+void check_faces(const SurfaceMesh& surface, const TetMesh& mesh,
+                 const ShellCheckOptions& options, ShellCheckResult& result) {
+  std::vector<FaceRecord> faces;
+  faces.reserve(4 * mesh.tets.size());
+  for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
+    const Tet& v = mesh.tets[t];
+    for (int k = 0; k < 4; ++k) {
+      const int* f = kOutwardFace[k];
+      faces.push_back({sorted3(v[f[0]], v[f[1]], v[f[2]]), static_cast<std::uint32_t>(t),
+                       static_cast<std::uint8_t>(k)});
+    }
+  }
+  std::sort(faces.begin(), faces.end());
+  for (std::size_t i = 0; i < faces.size();) {
+    std::size_t j = i + 1;
+    while (j < faces.size() && faces[j].key == faces[i].key) ++j;
+    if (j - i > 2) ++result.nonmanifold_faces;
+    i = j;
+  }
+
+  const std::size_t max_listed = options.max_listed;
+  for (std::size_t f = 0; f < surface.triangles.size(); ++f) {
+    const Triangle& tri = surface.triangles[f];
+    FaceRecord probe{sorted3(tri[0], tri[1], tri[2]), 0, 0};
+    const auto lo = std::lower_bound(faces.begin(), faces.end(), probe);
+    auto hi = lo;
+    while (hi != faces.end() && hi->key == probe.key) ++hi;
+    const std::ptrdiff_t count = hi - lo;
+    if (count == 0) {
+      ++result.missing_triangles;
+      list_item(result.first_missing_triangles, max_listed, f);
+    } else if (count > 1) {
+      ++result.shared_triangles;
+      list_item(result.first_shared_triangles, max_listed, f);
+    } else {
+      const Tet& v = mesh.tets[lo->tet];
+      const int* k = kOutwardFace[lo->face];
+      if (!same_cycle({v[k[0]], v[k[1]], v[k[2]]}, tri)) {
+        ++result.misoriented_triangles;
+        list_item(result.first_misoriented_triangles, max_listed, f);
+      }
+    }
+  }
+}
+
+std::string format_list(const std::vector<std::uint32_t>& list) {
+  std::ostringstream s;
+  for (std::size_t i = 0; i < list.size(); ++i) s << (i ? ", " : "") << list[i];
+  return s.str();
+}
+
+}  // namespace
+
+bool ShellCheckResult::valid() const {
+  return inverted_tets == 0 && zero_volume_tets == 0 && outside_inner_vertices == 0 &&
+         moved_surface_points == 0 && missing_triangles == 0 && shared_triangles == 0 &&
+         misoriented_triangles == 0 && nonmanifold_faces == 0 && overlapping_pairs == 0 &&
+         !too_many_tets;
+}
+
+ShellCheckResult check_shell(const SurfaceMesh& surface, const TetMesh& mesh,
+                             const ShellCheckOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  const std::size_t n_points = mesh.points.size();
+  for (std::size_t t = 0; t < mesh.tets.size(); ++t)
+    for (const std::uint32_t v : mesh.tets[t])
+      if (v >= n_points)
+        throw InputError("check_shell: tet " + std::to_string(t) + " refers to point " +
+                         std::to_string(v) + ", but the tet mesh has " +
+                         std::to_string(n_points) + " points");
+  if (!mesh.inner.empty() && mesh.inner.size() != n_points)
+    throw InputError("check_shell: " + std::to_string(mesh.inner.size()) + " inner flags for " +
+                     std::to_string(n_points) + " points; give one per point or none");
+
+  ShellCheckResult result;
+  result.tets = mesh.tets.size();
+  result.faces = surface.triangles.size();
+  result.too_many_tets = result.tets > 3 * result.faces;
+  const std::size_t max_listed = options.max_listed;
+
+  // Volumes: 0 positive, 1 inverted, 2 zero-volume.
+  std::vector<std::uint8_t> sign(mesh.tets.size(), 0);
+  for_each_chunk(
+      mesh.tets.size(),
+      [&](std::size_t begin, std::size_t end) {
+        for (std::size_t t = begin; t != end; ++t) {
+          const Tet& v = mesh.tets[t];
+          const std::array<Vec3d, 4> p = {mesh.points[v[0]], mesh.points[v[1]],
+                                          mesh.points[v[2]], mesh.points[v[3]]};
+          double l = 0.0;
+          for (const auto& e : kTetEdge) l = std::max(l, distance(p[e[0]], p[e[1]]));
+          const double vol = tet_volume(p[0], p[1], p[2], p[3]);
+          if (std::abs(vol) <= options.zero_volume_tolerance * l * l * l)
+            sign[t] = 2;
+          else if (vol < 0.0)
+            sign[t] = 1;
+        }
+      },
+      4096);
+  for (std::size_t t = 0; t < sign.size(); ++t) {
+    if (sign[t] == 1) {
+      ++result.inverted_tets;
+      list_item(result.first_inverted_tets, max_listed, t);
+    } else if (sign[t] == 2) {
+      ++result.zero_volume_tets;
+      list_item(result.first_zero_volume_tets, max_listed, t);
+    }
+  }
+
+  // Surface points kept.
+  const std::size_t n_surface = surface.points.size();
+  for (std::size_t v = 0; v < n_surface; ++v) {
+    if (v >= n_points || mesh.points[v] != surface.points[v]) {
+      ++result.moved_surface_points;
+      list_item(result.first_moved_surface_points, max_listed, v);
+    }
+  }
+
+  // Inner points inside.
+  std::vector<std::uint32_t> inner_points;
+  for (std::size_t v = 0; v < n_points; ++v)
+    if (mesh.inner.empty() ? v >= n_surface : mesh.inner[v] != 0)
+      inner_points.push_back(static_cast<std::uint32_t>(v));
+  result.checked_inner_vertices = inner_points.size();
+  if (!inner_points.empty()) {
+    const InsideTester tester(surface,
+                              options.on_surface_tolerance * bounding_box(surface).diagonal());
+    std::vector<std::uint8_t> outside(inner_points.size(), 0);
+    for_each_index(inner_points.size(), [&](std::size_t i) {
+      outside[i] = tester.outside(mesh.points[inner_points[i]]) ? 1 : 0;
+    });
+    for (std::size_t i = 0; i < inner_points.size(); ++i) {
+      if (outside[i]) {
+        ++result.outside_inner_vertices;
+        list_item(result.first_outside_vertices, max_listed, inner_points[i]);
+      }
+    }
+  }
+
+  check_faces(surface, mesh, options, result);
+
+  if (options.check_overlaps) {
+    const auto overlap_start = std::chrono::steady_clock::now();
+    check_overlaps(mesh, options, result);
+    result.overlaps_checked = true;
+    result.overlap_seconds = seconds_since(overlap_start);
+  }
+  result.seconds = seconds_since(start);
+  return result;
+}
+
+std::string describe_problems(const ShellCheckResult& r) {
+  std::ostringstream s;
+  const auto line = [&](std::size_t count, const char* what,
+                        const std::vector<std::uint32_t>& first) {
+    if (count == 0) return;
+    s << count << ' ' << what;
+    if (!first.empty()) s << " (first: " << format_list(first) << ')';
+    s << '\n';
+  };
+  line(r.inverted_tets, "inverted tets", r.first_inverted_tets);
+  line(r.zero_volume_tets, "zero-volume tets", r.first_zero_volume_tets);
+  line(r.outside_inner_vertices, "inner vertices outside the surface", r.first_outside_vertices);
+  line(r.moved_surface_points, "surface points moved", r.first_moved_surface_points);
+  line(r.missing_triangles, "input triangles not a face of any tet", r.first_missing_triangles);
+  line(r.shared_triangles, "input triangles shared by several tets", r.first_shared_triangles);
+  line(r.misoriented_triangles, "input triangles on a tet turned the wrong way",
+       r.first_misoriented_triangles);
+  line(r.nonmanifold_faces, "faces shared by three or more tets", {});
+  if (r.overlapping_pairs > 0) {
+    s << r.overlapping_pairs << " overlapping tet pairs (first:";
+    for (std::size_t i = 0; i < r.first_overlapping_pairs.size(); ++i)
+      s << (i ? ", " : " ") << '(' << r.first_overlapping_pairs[i][0] << ", "
+        << r.first_overlapping_pairs[i][1] << ')';
+    s << ")\n";
+  }
+  if (r.too_many_tets) s << r.tets << " tets for " << r.faces << " triangles: more than 3 per\n";
+  return s.str();
+}
+
+bool point_outside_surface(const SurfaceMesh& surface, const Vec3d& p, double tolerance) {
+  return InsideTester(surface, tolerance).outside(p);
+}
+
+bool tets_overlap(const std::array<Vec3d, 4>& a, const std::array<Vec3d, 4>& b,
+                  double tolerance) {
+  return geometries_overlap(tet_geometry(a), tet_geometry(b), tolerance);
+}
+
+}  // namespace vdb_shell

@@ -1,0 +1,393 @@
+// assemble_test.cpp — the prism split (all 720 index orders, welding), whole shells on closed
+// surfaces (conformity, orientation, boundary faces, T == 3F), and the quality measures with
+// their analytic values (regular tet, flat tet, coverage of a scaled cube).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <set>
+#include <utility>
+
+#include "assets/shapes.h"
+#include "core/assemble.h"
+#include "core/errors.h"
+#include "core/quality.h"
+#include "core/shell_checks.h"
+
+namespace vdb_shell {
+namespace {
+
+using Key = std::array<std::uint32_t, 3>;
+
+Key sorted_key(std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+  Key k = {a, b, c};
+  std::sort(k.begin(), k.end());
+  return k;
+}
+
+/// The regular octahedron with vertices on the axes at distance 1, outward oriented.
+SurfaceMesh octahedron() {
+  SurfaceMesh m;
+  m.points = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  for (int sx = 0; sx < 2; ++sx)
+    for (int sy = 0; sy < 2; ++sy)
+      for (int sz = 0; sz < 2; ++sz) {
+        const std::uint32_t x = sx, y = 2 + sy, z = 4 + sz;
+        if ((sx + sy + sz) % 2 == 0)
+          m.triangles.push_back({x, y, z});
+        else
+          m.triangles.push_back({x, z, y});
+      }
+  return m;
+}
+
+Vec3d centroid(const SurfaceMesh& s) {
+  Vec3d c;
+  for (const Vec3d& p : s.points) c += p;
+  return c / static_cast<double>(s.points.size());
+}
+
+/// One inner vertex per surface vertex: the vertex scaled by `factor` about the centroid.
+ShellInput scaled_input(const SurfaceMesh& s, double factor) {
+  const Vec3d c = centroid(s);
+  ShellInput in;
+  for (std::size_t v = 0; v < s.points.size(); ++v) {
+    in.inner_points.push_back(c + (s.points[v] - c) * factor);
+    in.inner_id.push_back(static_cast<std::uint32_t>(v));
+  }
+  return in;
+}
+
+/// Every inner vertex welded into the centroid.
+ShellInput centroid_input(const SurfaceMesh& s) {
+  ShellInput in;
+  in.inner_points = {centroid(s)};
+  in.inner_id.assign(s.points.size(), 0);
+  return in;
+}
+
+double volume(const TetMesh& m, const Tet& t) {
+  return tet_volume(m.points[t[0]], m.points[t[1]], m.points[t[2]], m.points[t[3]]);
+}
+
+/// How many tets have each triangle as a face.
+std::map<Key, int> face_counts(const TetMesh& m) {
+  std::map<Key, int> count;
+  for (const Tet& t : m.tets)
+    for (int k = 0; k < 4; ++k)
+      ++count[sorted_key(t[(k + 1) % 4], t[(k + 2) % 4], t[(k + 3) % 4])];
+  return count;
+}
+
+/// The invariants of a shell without welding: T == 3F, all positive, each input and inner
+/// triangle a face of exactly one tet, every other face of exactly two.
+void expect_conforming_shell(const SurfaceMesh& s, const ShellInput& in,
+                             const AssembleResult& r) {
+  const std::size_t n = s.points.size();
+  EXPECT_EQ(r.tets, 3 * s.num_faces());
+  EXPECT_EQ(r.mesh.tets.size(), r.tets);
+  for (const Tet& t : r.mesh.tets) EXPECT_GT(volume(r.mesh, t), 0.0);
+  std::map<Key, int> count = face_counts(r.mesh);
+  std::set<Key> boundary;
+  for (const Triangle& t : s.triangles) {
+    const Key outer = sorted_key(t[0], t[1], t[2]);
+    const Key inner = sorted_key(static_cast<std::uint32_t>(n + in.inner_id[t[0]]),
+                                 static_cast<std::uint32_t>(n + in.inner_id[t[1]]),
+                                 static_cast<std::uint32_t>(n + in.inner_id[t[2]]));
+    EXPECT_EQ(count[outer], 1);
+    EXPECT_EQ(count[inner], 1);
+    boundary.insert(outer);
+    boundary.insert(inner);
+  }
+  for (const auto& [key, c] : count) {
+    if (!boundary.count(key)) {
+      EXPECT_EQ(c, 2) << key[0] << " " << key[1] << " " << key[2];
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+
+TEST(Assemble, SplitPrismEveryIndexOrder) {
+  // A prism with planar sides: the inner triangle is the outer one shrunk about a point below
+  // it, so its volume is known and both diagonals of each side are valid.
+  const std::array<Vec3d, 3> outer = {Vec3d{0, 0, 0}, Vec3d{1, 0, 0}, Vec3d{0.2, 1, 0}};
+  const Vec3d apex{0.3, 0.4, -2.0};
+  std::array<Vec3d, 6> corner;
+  for (int k = 0; k < 3; ++k) {
+    corner[k] = outer[k];
+    corner[k + 3] = apex + (outer[k] - apex) * 0.6;
+  }
+  const double prism_volume =
+      tet_volume(outer[0], outer[2], outer[1], apex) * (1.0 - 0.6 * 0.6 * 0.6);
+  ASSERT_GT(prism_volume, 0.0);
+
+  std::array<std::uint32_t, 6> ids = {0, 1, 2, 3, 4, 5};
+  int orders = 0;
+  do {
+    ++orders;
+    const PrismTets split = split_prism(ids);
+    ASSERT_EQ(split.count, 3);
+    EXPECT_EQ(split.dropped, 0);
+    // Corner positions by global id.
+    std::array<Vec3d, 6> at;
+    for (int k = 0; k < 6; ++k) at[ids[k]] = corner[k];
+    double sum = 0.0;
+    std::set<std::pair<std::uint32_t, std::uint32_t>> edges;
+    std::array<std::array<Vec3d, 4>, 3> geometry;
+    for (int t = 0; t < 3; ++t) {
+      const Tet& tet = split.tets[t];
+      geometry[t] = {at[tet[0]], at[tet[1]], at[tet[2]], at[tet[3]]};
+      const double v = tet_volume(at[tet[0]], at[tet[1]], at[tet[2]], at[tet[3]]);
+      EXPECT_GT(v, 0.0);
+      sum += v;
+      for (int i = 0; i < 4; ++i)
+        for (int j = i + 1; j < 4; ++j)
+          edges.insert({std::min(tet[i], tet[j]), std::max(tet[i], tet[j])});
+    }
+    EXPECT_NEAR(sum, prism_volume, 1e-12);
+    for (int i = 0; i < 3; ++i)
+      for (int j = i + 1; j < 3; ++j)
+        EXPECT_FALSE(tets_overlap(geometry[i], geometry[j], 1e-12));
+    // Each side quad (k, k+1, k+1', k') is cut along the diagonal through its smallest index.
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t q[4] = {ids[k], ids[(k + 1) % 3], ids[3 + (k + 1) % 3], ids[3 + k]};
+      const int m = static_cast<int>(std::min_element(q, q + 4) - q);
+      const std::uint32_t d0 = q[m], d1 = q[(m + 2) % 4];
+      const std::uint32_t o0 = q[(m + 1) % 4], o1 = q[(m + 3) % 4];
+      EXPECT_TRUE(edges.count({std::min(d0, d1), std::max(d0, d1)}));
+      EXPECT_FALSE(edges.count({std::min(o0, o1), std::max(o0, o1)}));
+    }
+    // The outer triangle is a face of one tet.
+    int with_outer = 0;
+    for (const Tet& tet : split.tets) {
+      const std::set<std::uint32_t> s(tet.begin(), tet.end());
+      with_outer += s.count(ids[0]) && s.count(ids[1]) && s.count(ids[2]);
+    }
+    EXPECT_EQ(with_outer, 1);
+  } while (std::next_permutation(ids.begin(), ids.end()));
+  EXPECT_EQ(orders, 720);
+}
+
+TEST(Assemble, SplitPrismInvertedPrismGivesNegativeTets) {
+  // The inner triangle above the outer one: the prism is inverted and no tet may hide it.
+  const std::array<Vec3d, 6> at = {Vec3d{0, 0, 0}, Vec3d{1, 0, 0}, Vec3d{0, 1, 0},
+                                   Vec3d{0, 0, 1}, Vec3d{1, 0, 1}, Vec3d{0, 1, 1}};
+  std::array<std::uint32_t, 6> ids = {0, 1, 2, 3, 4, 5};
+  do {
+    std::array<Vec3d, 6> p;
+    for (int k = 0; k < 6; ++k) p[ids[k]] = at[k];
+    const PrismTets split = split_prism(ids);
+    for (int t = 0; t < split.count; ++t) {
+      const Tet& tet = split.tets[t];
+      EXPECT_LT(tet_volume(p[tet[0]], p[tet[1]], p[tet[2]], p[tet[3]]), 0.0);
+    }
+  } while (std::next_permutation(ids.begin(), ids.end()));
+}
+
+TEST(Assemble, SplitPrismWelded) {
+  const Vec3d outer[3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  const Vec3d down{0, 0, -1};
+  // Two inner corners welded into one vertex below the middle of their outer edge, the third
+  // below its own corner; every order of the ids, the shared id taken from either corner.
+  for (int lone = 0; lone < 3; ++lone) {
+    const int j = (lone + 1) % 3, k = (lone + 2) % 3;
+    for (int keep = 0; keep < 2; ++keep) {
+      std::array<std::uint32_t, 6> ids = {0, 1, 2, 3, 4, 5};
+      do {
+        std::array<std::uint32_t, 6> welded = ids;
+        welded[3 + j] = welded[3 + k] = keep == 0 ? ids[3 + j] : ids[3 + k];
+        std::map<std::uint32_t, Vec3d> at;
+        for (int c = 0; c < 3; ++c) at[welded[c]] = outer[c];
+        at[welded[3 + lone]] = outer[lone] + down;
+        at[welded[3 + j]] = (outer[j] + outer[k]) * 0.5 + down;
+        const PrismTets split = split_prism(welded);
+        EXPECT_GE(split.count, 1);
+        EXPECT_LE(split.count, 2);
+        EXPECT_EQ(split.count + split.dropped, 3);
+        for (int t = 0; t < split.count; ++t) {
+          const Tet& tet = split.tets[t];
+          EXPECT_GT(tet_volume(at[tet[0]], at[tet[1]], at[tet[2]], at[tet[3]]), 0.0);
+        }
+      } while (std::next_permutation(ids.begin(), ids.end()));
+    }
+  }
+  // All three inner corners one vertex: exactly the tet (outer triangle, apex), positive.
+  for (std::uint32_t apex : {0u, 7u}) {
+    const std::uint32_t o = apex == 0 ? 1 : 0;
+    const std::array<std::uint32_t, 6> ids = {o, o + 1, o + 2, apex, apex, apex};
+    const PrismTets split = split_prism(ids);
+    ASSERT_EQ(split.count, 1);
+    EXPECT_EQ(split.dropped, 2);
+    std::map<std::uint32_t, Vec3d> at = {{o, outer[0]}, {o + 1, outer[1]}, {o + 2, outer[2]},
+                                         {apex, Vec3d{0.3, 0.3, -1}}};
+    const Tet& t = split.tets[0];
+    EXPECT_GT(tet_volume(at[t[0]], at[t[1]], at[t[2]], at[t[3]]), 0.0);
+    EXPECT_EQ(std::set<std::uint32_t>(t.begin(), t.end()),
+              (std::set<std::uint32_t>{o, o + 1, o + 2, apex}));
+  }
+}
+
+TEST(Assemble, OctahedronShellIsConforming) {
+  const SurfaceMesh s = octahedron();
+  ASSERT_GT(signed_volume(s), 0.0);
+  const ShellInput in = scaled_input(s, 0.5);
+  const AssembleResult r = assemble_shell(s, in);
+  expect_conforming_shell(s, in, r);
+  EXPECT_EQ(r.dropped_degenerate_tets, 0u);
+  EXPECT_EQ(r.welded_inner_vertices, 0u);
+  EXPECT_EQ(r.collapsed_prisms, 0u);
+  const ShellCheckResult c = check_shell(s, r.mesh);
+  EXPECT_TRUE(c.valid()) << describe_problems(c);
+}
+
+TEST(Assemble, BoxShellIsConformingWithPerElementData) {
+  const SurfaceMesh s = make_shape("box", 1);
+  const ShellInput in = scaled_input(s, 0.5);
+  const AssembleResult r = assemble_shell(s, in);
+  expect_conforming_shell(s, in, r);
+  const std::size_t n = s.points.size();
+  const TetMesh& m = r.mesh;
+  ASSERT_EQ(m.points.size(), 2 * n);
+  for (std::size_t v = 0; v < n; ++v) {
+    EXPECT_EQ(m.points[v], s.points[v]);
+    EXPECT_EQ(m.inner[v], 0);
+    EXPECT_EQ(m.thickness[v], 0.0);
+    EXPECT_EQ(m.inner[n + v], 1);
+    EXPECT_DOUBLE_EQ(m.thickness[n + v], distance(s.points[v], in.inner_points[v]));
+  }
+  ASSERT_EQ(m.source_triangle.size(), m.tets.size());
+  ASSERT_EQ(m.quality.size(), m.tets.size());
+  for (std::size_t t = 0; t < m.tets.size(); ++t) {
+    EXPECT_EQ(m.source_triangle[t], t / 3);
+    const Tet& tet = m.tets[t];
+    EXPECT_DOUBLE_EQ(m.quality[t], tet_quality(m.points[tet[0]], m.points[tet[1]],
+                                               m.points[tet[2]], m.points[tet[3]]));
+    EXPECT_GT(m.quality[t], 0.0);
+  }
+  const ShellCheckResult c = check_shell(s, m);
+  EXPECT_TRUE(c.valid()) << describe_problems(c);
+}
+
+TEST(Assemble, SphereShellIsConforming) {
+  const SurfaceMesh s = make_shape("sphere", 1);
+  const ShellInput in = scaled_input(s, 0.7);
+  const AssembleResult r = assemble_shell(s, in);
+  expect_conforming_shell(s, in, r);
+  const ShellCheckResult c = check_shell(s, r.mesh);
+  EXPECT_TRUE(c.valid()) << describe_problems(c);
+}
+
+TEST(Assemble, AllInnerVerticesWeldedGiveOneTetPerPrism) {
+  for (const SurfaceMesh& s : {octahedron(), make_shape("box", 1), make_shape("sphere", 1)}) {
+    const ShellInput in = centroid_input(s);
+    const AssembleResult r = assemble_shell(s, in);
+    const std::size_t n = s.points.size();
+    EXPECT_EQ(r.tets, s.num_faces());
+    EXPECT_EQ(r.collapsed_prisms, s.num_faces());
+    EXPECT_EQ(r.dropped_degenerate_tets, 2 * s.num_faces());
+    EXPECT_EQ(r.welded_inner_vertices, n - 1);
+    EXPECT_EQ(r.unused_inner_points, 0u);
+    for (std::size_t t = 0; t < r.mesh.tets.size(); ++t) {
+      const Tet& tet = r.mesh.tets[t];
+      const Triangle& tri = s.triangles[r.mesh.source_triangle[t]];
+      EXPECT_EQ(std::set<std::uint32_t>(tet.begin(), tet.end()),
+                (std::set<std::uint32_t>{tri[0], tri[1], tri[2], static_cast<std::uint32_t>(n)}));
+      EXPECT_GT(volume(r.mesh, tet), 0.0);
+    }
+    // Every face through the centre is shared by two tets.
+    for (const auto& [key, c] : face_counts(r.mesh))
+      EXPECT_EQ(c, key[2] == n ? 2 : 1);
+    const ShellCheckResult c = check_shell(s, r.mesh);
+    EXPECT_TRUE(c.valid()) << describe_problems(c);
+    const QualitySummary q = summarize_quality(s, r.mesh);
+    EXPECT_NEAR(q.coverage, 1.0, 1e-12);
+  }
+}
+
+TEST(Assemble, UnusedInnerPointsAreKeptAndCounted) {
+  const SurfaceMesh s = octahedron();
+  ShellInput in = scaled_input(s, 0.5);
+  in.inner_points.push_back({0, 0, 0});
+  const AssembleResult r = assemble_shell(s, in);
+  EXPECT_EQ(r.unused_inner_points, 1u);
+  EXPECT_EQ(r.mesh.points.size(), 13u);
+  EXPECT_EQ(r.tets, 24u);
+}
+
+TEST(Assemble, RejectsInconsistentInput) {
+  const SurfaceMesh s = octahedron();
+  ShellInput in = scaled_input(s, 0.5);
+  in.inner_id.pop_back();
+  EXPECT_THROW(assemble_shell(s, in), InputError);
+  in = scaled_input(s, 0.5);
+  in.inner_id[2] = 6;
+  EXPECT_THROW(assemble_shell(s, in), InputError);
+}
+
+// ---------------------------------------------------------------------------------------------
+
+TEST(Quality, RegularTetIsOne) {
+  const Vec3d a{1, 1, 1}, b{1, -1, -1}, c{-1, 1, -1}, d{-1, -1, 1};
+  const double sign = tet_volume(a, b, c, d) > 0.0 ? 1.0 : -1.0;
+  EXPECT_NEAR(tet_quality(a, b, c, d), sign, 1e-12);
+  EXPECT_NEAR(tet_quality(a, b, d, c), -sign, 1e-12);
+  const double regular_dihedral_deg = std::acos(1.0 / 3.0) * 180.0 / 3.14159265358979323846;
+  EXPECT_NEAR(tet_min_dihedral_deg(a, b, c, d), regular_dihedral_deg, 1e-9);
+  // Scale and translation do not matter.
+  const Vec3d o{10, -3, 7};
+  EXPECT_NEAR(tet_quality(o + a * 1e-3, o + b * 1e-3, o + c * 1e-3, o + d * 1e-3), sign, 1e-9);
+}
+
+TEST(Quality, FlatTetIsZero) {
+  const Vec3d a{0, 0, 0}, b{1, 0, 0}, c{0, 1, 0}, d{1, 1, 0};
+  EXPECT_EQ(tet_quality(a, b, c, d), 0.0);
+  EXPECT_EQ(tet_min_dihedral_deg(a, b, c, d), 0.0);
+  EXPECT_EQ(tet_quality(a, a, a, a), 0.0);
+  // The corner tet of the unit cube: V = 1/6, l_rms^2 = (3 + 3 * 2) / 6.
+  const double q = tet_quality(a, b, c, Vec3d{0, 0, 1});
+  EXPECT_NEAR(q, 6.0 * std::sqrt(2.0) / 6.0 / std::pow(1.5, 1.5), 1e-12);
+}
+
+TEST(Quality, CoverageOfScaledCube) {
+  // Cube [-0.5, 0.5]^3, inner cube half as large: shell volume 1 - 1/8.
+  const SurfaceMesh s = make_shape("box", 2);
+  const AssembleResult r = assemble_shell(s, scaled_input(s, 0.5));
+  const QualitySummary q = summarize_quality(s, r.mesh);
+  EXPECT_EQ(q.tets, r.tets);
+  EXPECT_NEAR(q.enclosed_volume, 1.0, 1e-12);
+  EXPECT_NEAR(q.shell_volume, 0.875, 1e-12);
+  EXPECT_NEAR(q.coverage, 0.875, 1e-12);
+  EXPECT_EQ(q.non_positive, 0u);
+  ASSERT_EQ(q.histogram.size(), 10u);
+  EXPECT_EQ(std::accumulate(q.histogram.begin(), q.histogram.end(), std::size_t{0}), q.tets);
+  EXPECT_GT(q.min_quality, 0.0);
+  EXPECT_LE(q.min_quality, q.median_quality);
+  EXPECT_LE(q.median_quality, 1.0);
+  EXPECT_GT(q.mean_quality, 0.0);
+  EXPECT_GT(q.min_dihedral_deg, 0.0);
+  EXPECT_LT(q.min_dihedral_deg, 70.6);
+}
+
+TEST(Quality, HistogramBinsAndStatistics) {
+  TetMesh m;
+  m.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  m.tets = {{0, 1, 2, 3}, {0, 1, 3, 2}, {0, 1, 2, 3}};
+  m.quality = {1.0, -0.5, 0.05};  // used as given
+  SurfaceMesh s;
+  const QualitySummary q = summarize_quality(s, m);
+  EXPECT_EQ(q.non_positive, 1u);
+  EXPECT_EQ(q.histogram[9], 1u);
+  EXPECT_EQ(q.histogram[0], 1u);
+  EXPECT_DOUBLE_EQ(q.min_quality, -0.5);
+  EXPECT_DOUBLE_EQ(q.median_quality, 0.05);
+  EXPECT_DOUBLE_EQ(q.mean_quality, 0.55 / 3.0);
+  EXPECT_NEAR(q.shell_volume, 1.0 / 6.0, 1e-15);
+  EXPECT_EQ(q.coverage, 0.0);  // no enclosed volume
+}
+
+}  // namespace
+}  // namespace vdb_shell

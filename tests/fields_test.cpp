@@ -1,0 +1,374 @@
+// fields_test.cpp — the distance, gradient and flux fields (vdb_ops/fields.h).
+//
+// Analytic references: a sphere of radius R (phi = |x| - R, grad = x / |x|) and the cube
+// [-0.5, 0.5]^3 (phi = max |x_i| - 0.5 inside; medial surface where the two largest |x_i| tie).
+// Shapes come from assets/shapes.h; fields are built once per shape at 128^3 and shared.
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <iostream>
+#include <cmath>
+#include <memory>
+#include <random>
+#include <string>
+
+#include "assets/shapes.h"
+#include "core/errors.h"
+#include "tests/test_support.h"
+#include "vdb_ops/fields.h"
+
+namespace vdb_shell {
+namespace {
+
+constexpr double kRadius = 0.5;  // make_shape("sphere") radius, world units
+
+const SurfaceMesh& sphere_mesh() {
+  static const SurfaceMesh mesh = make_shape("sphere", 4);
+  return mesh;
+}
+
+const SurfaceMesh& box_mesh() {
+  static const SurfaceMesh mesh = make_shape("box", 2);
+  return mesh;
+}
+
+const Fields& sphere_fields() {
+  static const std::unique_ptr<Fields> fields = build_fields(sphere_mesh(), FieldOptions{});
+  return *fields;
+}
+
+/// Box fields with (almost) every flux value stored, to check the values themselves.
+const Fields& box_fields_dense_flux() {
+  static const std::unique_ptr<Fields> fields = [] {
+    FieldOptions options;
+    options.flux_min = 1e-4;
+    return build_fields(box_mesh(), options);
+  }();
+  return *fields;
+}
+
+template <typename F>
+void for_each_voxel(const Fields& fields, F&& f) {
+  const IndexBox b = fields.active_index_box();
+  for (int i = b.lo[0]; i <= b.hi[0]; ++i)
+    for (int j = b.lo[1]; j <= b.hi[1]; ++j)
+      for (int k = b.lo[2]; k <= b.hi[2]; ++k) f(i, j, k);
+}
+
+// --- plan and bad options ----------------------------------------------------------------------
+
+TEST(FieldsPlan, VoxelSizeFromResolutionOrGiven) {
+  FieldOptions options;
+  options.resolution = 64;
+  const FieldPlan plan = plan_fields(box_mesh(), options);
+  EXPECT_NEAR(plan.voxel_size, 1.0 / 64.0, 1e-12);
+  EXPECT_EQ(plan.resolution, 64);
+  EXPECT_GE(plan.dims[0], 64);
+  EXPECT_GT(plan.estimated_bytes, 0u);
+  options.voxel_size = 0.05;
+  const FieldPlan given = plan_fields(box_mesh(), options);
+  EXPECT_DOUBLE_EQ(given.voxel_size, 0.05);
+  EXPECT_EQ(given.resolution, 20);
+}
+
+TEST(FieldsPlan, RejectsCoarseResolution) {
+  FieldOptions options;
+  options.resolution = 7;
+  EXPECT_THROW(plan_fields(box_mesh(), options), InputError);
+  EXPECT_THROW(build_fields(box_mesh(), options), InputError);
+  options.resolution = 128;
+  options.voxel_size = 0.2;  // 5 voxels across
+  EXPECT_THROW(plan_fields(box_mesh(), options), InputError);
+  options.voxel_size = -1.0;
+  EXPECT_THROW(plan_fields(box_mesh(), options), InputError);
+  options.voxel_size = 0.0;
+  options.flux_min = 2.0;
+  EXPECT_THROW(plan_fields(box_mesh(), options), InputError);
+  EXPECT_THROW(build_fields(SurfaceMesh{}, FieldOptions{}), InputError);
+}
+
+TEST(FieldsPlan, RefusesWhatDoesNotFitBeforeAllocating) {
+  FieldOptions options;
+  options.resolution = 100000;  // ~1e15 voxels: must fail fast, not be OOM-killed
+  try {
+    build_fields(box_mesh(), options);
+    FAIL() << "expected ResourceError";
+  } catch (const ResourceError& e) {
+    EXPECT_NE(std::string(e.what()).find("--max-memory"), std::string::npos) << e.what();
+  }
+  options.resolution = 512;
+  options.max_memory_gb = 0.01;
+  EXPECT_THROW(plan_fields(box_mesh(), options), ResourceError);
+}
+
+// --- sphere: SDF, gradient, flux ---------------------------------------------------------------
+
+TEST(FieldsSphere, DistanceWithinHalfVoxelEverywhereInside) {
+  const Fields& fields = sphere_fields();
+  const double h = fields.voxel_size();
+  EXPECT_NEAR(h, 1.0 / 128.0, 1e-9);
+  double worst = 0.0;
+  std::size_t inside = 0, negative = 0;
+  for_each_voxel(fields, [&](int i, int j, int k) {
+    const double r = norm(fields.voxel_center(i, j, k));
+    if (fields.phi_at_voxel(i, j, k) < 0.0) ++negative;
+    if (r >= kRadius) return;
+    ++inside;
+    worst = std::max(worst, std::abs(fields.phi_at_voxel(i, j, k) - (r - kRadius)));
+  });
+  EXPECT_GT(inside, 1000000u);
+  EXPECT_LT(worst, 0.5 * h) << "worst |phi - (|x| - R)| = " << worst / h << " voxels";
+  // Filled to the deepest point: the centre holds -R, not a clamped band value.
+  EXPECT_NEAR(fields.probe()->phi({0, 0, 0}), -kRadius, 0.5 * h);
+  EXPECT_EQ(fields.stats().interior_voxels, negative);
+}
+
+TEST(FieldsSphere, MeshVerticesOnZeroLevel) {
+  const Fields& fields = sphere_fields();
+  auto probe = fields.probe();
+  double worst = 0.0;
+  for (const Vec3d& p : sphere_mesh().points) worst = std::max(worst, std::abs(probe->phi(p)));
+  EXPECT_LT(worst, 0.25 * fields.voxel_size());
+}
+
+TEST(FieldsSphere, GradientUnitAwayFromCentre) {
+  const Fields& fields = sphere_fields();
+  const double h = fields.voxel_size();
+  auto probe = fields.probe();
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int checked = 0;
+  double worst_len = 0.0, worst_dir = 0.0;
+  Vec3d worst_at;
+  while (checked < 20000) {
+    const Vec3d p{u(rng) * kRadius, u(rng) * kRadius, u(rng) * kRadius};
+    const double r = norm(p);
+    if (r < 4.0 * h || r > kRadius) continue;
+    const Vec3d g = probe->gradient(p);
+    worst_len = std::max(worst_len, std::abs(norm(g) - 1.0));
+    const double dir = 1.0 - dot(normalized(g), p / r);
+    if (dir > worst_dir) {
+      worst_dir = dir;
+      worst_at = p;
+    }
+    ++checked;
+  }
+  EXPECT_LT(worst_len, 0.05);
+  EXPECT_LT(worst_dir, 1e-3) << "at (" << worst_at.x << ", " << worst_at.y << ", " << worst_at.z
+                             << "), r = " << norm(worst_at) / h << " voxels";
+}
+
+TEST(FieldsSphere, StoredAndStencilGradientsAgree) {
+  FieldOptions options;
+  options.resolution = 48;
+  const auto on_the_fly = build_fields(sphere_mesh(), options);
+  options.store_gradient = true;
+  const auto stored = build_fields(sphere_mesh(), options);
+  ASSERT_FALSE(on_the_fly->has_gradient_grid());
+  ASSERT_TRUE(stored->has_gradient_grid());
+  EXPECT_GT(stored->stats().gradient_active_voxels, 0u);
+  auto a = on_the_fly->probe();
+  auto b = stored->probe();
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-0.5, 0.5);
+  for (int n = 0; n < 5000; ++n) {
+    const Vec3d p{u(rng), u(rng), u(rng)};
+    if (norm(p) > kRadius + on_the_fly->voxel_size()) continue;  // the band's edge differs
+    const Vec3d ga = a->gradient(p), gb = b->gradient(p);
+    ASSERT_LT(norm(ga - gb), 1e-5) << "at (" << p.x << ", " << p.y << ", " << p.z << ")";
+  }
+}
+
+TEST(FieldsSphere, FluxPeaksAtCentreAndIsSparse) {
+  const Fields& fields = sphere_fields();
+  auto probe = fields.probe();
+  EXPECT_GT(probe->flux({0, 0, 0}), 0.9);  // all 26 neighbours point straight out
+  EXPECT_LT(std::abs(probe->flux({0.3, 0.1, 0.0})), 0.05);
+  const FieldStats& s = fields.stats();
+  EXPECT_GT(s.flux_active_voxels, 0u);
+  EXPECT_LT(double(s.flux_active_voxels), 0.1 * double(s.interior_voxels))
+      << s.flux_active_voxels << " flux voxels for " << s.interior_voxels << " inside";
+}
+
+// --- box: flux on and off the medial surface -----------------------------------------------------
+
+/// Distance (world units) from voxel centre c to the plane where the two largest |c_i| tie, and
+/// whether c lies exactly on it (integer comparison of the voxel's offsets from the centre).
+struct MedialInfo {
+  bool on = false;
+  double plane_distance = 0.0;
+};
+
+MedialInfo medial_info(const Fields& fields, int i, int j, int k) {
+  const Vec3d c = fields.voxel_center(i, j, k);
+  const double h = fields.voxel_size();
+  // Voxel offsets from the box centre (the centre is a voxel centre: -0.5 is a multiple of h).
+  std::array<long, 3> a = {std::lround(std::abs(c.x) / h), std::lround(std::abs(c.y) / h),
+                           std::lround(std::abs(c.z) / h)};
+  std::sort(a.begin(), a.end(), std::greater<long>());
+  return {a[0] == a[1], double(a[0] - a[1]) * h / std::sqrt(2.0)};
+}
+
+TEST(FieldsBox, ExactDistanceInside) {
+  const Fields& fields = box_fields_dense_flux();
+  const double h = fields.voxel_size();
+  double worst = 0.0;
+  for_each_voxel(fields, [&](int i, int j, int k) {
+    const Vec3d c = fields.voxel_center(i, j, k);
+    const double m = std::max({std::abs(c.x), std::abs(c.y), std::abs(c.z)});
+    if (m >= 0.5) return;
+    worst = std::max(worst, std::abs(fields.phi_at_voxel(i, j, k) - (m - 0.5)));
+  });
+  EXPECT_LT(worst, 0.1 * h);
+}
+
+TEST(FieldsBox, FluxMarksTheMedialSurfaceOnly) {
+  const Fields& fields = box_fields_dense_flux();
+  const double h = fields.voxel_size();
+  std::size_t on_count = 0, off_count = 0;
+  double min_on = 1.0, max_off = 0.0;
+  for_each_voxel(fields, [&](int i, int j, int k) {
+    if (!(fields.phi_at_voxel(i, j, k) < 0.0)) return;
+    const MedialInfo m = medial_info(fields, i, j, k);
+    const double f = fields.flux_at_voxel(i, j, k);
+    if (m.on) {
+      ++on_count;
+      min_on = std::min(min_on, f);
+    } else if (m.plane_distance > 2.0 * h) {
+      ++off_count;
+      max_off = std::max(max_off, std::abs(f));
+    }
+  });
+  EXPECT_GT(on_count, 10000u);
+  EXPECT_GT(off_count, 100000u);
+  EXPECT_GT(min_on, 0.1);
+  EXPECT_LT(max_off, 0.02);
+}
+
+TEST(FieldsBox, DefaultFluxGridIsSparse) {
+  const auto fields = build_fields(box_mesh(), FieldOptions{});
+  const FieldStats& s = fields->stats();
+  EXPECT_GT(s.flux_active_voxels, 0u);
+  EXPECT_LT(double(s.flux_active_voxels), 0.25 * double(s.interior_voxels))
+      << s.flux_active_voxels << " flux voxels for " << s.interior_voxels << " inside";
+}
+
+TEST(FieldsBox, SameGridsForAnyThreadCount) {
+  FieldOptions options;
+  options.resolution = 64;
+  options.store_gradient = true;
+  std::vector<VdbGridInfo> one, all;
+  {
+    tbb::global_control serial(tbb::global_control::max_allowed_parallelism, 1);
+    one = grid_infos(*build_fields(sphere_mesh(), options));
+  }
+  all = grid_infos(*build_fields(sphere_mesh(), options));
+  ASSERT_EQ(one.size(), 3u);
+  ASSERT_EQ(all.size(), 3u);
+  for (std::size_t g = 0; g < one.size(); ++g) {
+    EXPECT_EQ(one[g].name, all[g].name);
+    EXPECT_EQ(one[g].active_voxels, all[g].active_voxels);
+    EXPECT_EQ(one[g].checksum, all[g].checksum) << one[g].name;
+  }
+}
+
+// --- .vdb out and in -----------------------------------------------------------------------------
+
+TEST(FieldsVdb, RoundTripKeepsValuesAndMetadata) {
+  test::TempDir dir;
+  FieldOptions options;
+  options.resolution = 32;
+  options.store_gradient = true;
+  const auto fields = build_fields(box_mesh(), options);
+  const std::string path = dir.file("fields.vdb");
+  write_grids(path, *fields, {{"vdb_shell_input", "box.obj"}});
+
+  const std::vector<VdbGridInfo> mem = grid_infos(*fields);
+  const std::vector<VdbGridInfo> file = read_vdb_grid_infos(path);
+  ASSERT_EQ(file.size(), 3u);
+  ASSERT_EQ(mem.size(), 3u);
+  EXPECT_EQ(file[0].name, "surface");
+  EXPECT_EQ(file[0].grid_class, "level set");
+  EXPECT_EQ(file[1].name, "flux");
+  EXPECT_EQ(file[2].name, "gradient");
+  EXPECT_EQ(file[2].value_type, "vec3s");
+  for (std::size_t g = 0; g < 3; ++g) {
+    EXPECT_EQ(file[g].active_voxels, mem[g].active_voxels) << file[g].name;
+    EXPECT_EQ(file[g].checksum, mem[g].checksum) << file[g].name;
+    EXPECT_DOUBLE_EQ(file[g].voxel_size, fields->voxel_size());
+    EXPECT_EQ(file[g].metadata.at("vdb_shell_input"), "box.obj");
+    EXPECT_EQ(file[g].metadata.count("vdb_shell_voxel_size"), 1u);
+  }
+
+  // An independent reader.
+  const test::CommandResult which = test::run_command("command -v vdb_print");
+  if (which.exit_code == 0) {
+    const test::CommandResult r = test::run_command("vdb_print -l '" + path + "'");
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.out.find("surface"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("flux"), std::string::npos) << r.out;
+  }
+
+  // Read back as the level set of the same mesh: the same SDF and flux.
+  const auto back = fields_from_level_set(path, "", box_mesh(), options);
+  EXPECT_TRUE(back->stats().notices.empty());
+  const std::vector<VdbGridInfo> again = grid_infos(*back);
+  ASSERT_EQ(again.size(), 3u);
+  for (std::size_t g = 0; g < 3; ++g) EXPECT_EQ(again[g].checksum, mem[g].checksum);
+}
+
+TEST(FieldsVdb, RejectsBadLevelSets) {
+  test::TempDir dir;
+  FieldOptions options;
+  options.resolution = 16;
+  const auto fields = build_fields(box_mesh(), options);
+  const std::string path = dir.file("f.vdb");
+  write_grids(path, *fields, {});
+
+  EXPECT_THROW(fields_from_level_set(dir.file("missing.vdb"), "", box_mesh(), options),
+               InputError);
+  EXPECT_THROW(fields_from_level_set(path, "nope", box_mesh(), options), InputError);
+  try {
+    fields_from_level_set(path, "flux", box_mesh(), options);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("grid class to level set"), std::string::npos)
+        << e.what();
+  }
+  SurfaceMesh moved = box_mesh();
+  for (Vec3d& p : moved.points) p.x += 3.0;
+  try {
+    fields_from_level_set(path, "surface", moved, options);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("does not contain the mesh"), std::string::npos)
+        << e.what();
+  }
+  const std::string junk = dir.file("junk.vdb");
+  test::write_text(junk, "not a vdb file");
+  EXPECT_THROW(fields_from_level_set(junk, "", box_mesh(), options), InputError);
+}
+
+TEST(FieldsVdb, NarrowBandLevelSetGetsInteriorFilled) {
+  const test::CommandResult which = test::run_command("command -v vdb_tool");
+  if (which.exit_code != 0) GTEST_SKIP() << "vdb_tool (libopenvdb-tools) not installed";
+  test::TempDir dir;
+  const std::string path = dir.file("sphere.vdb");
+  const test::CommandResult r = test::run_command(
+      "vdb_tool -sphere voxel=0.015625 radius=0.5 width=3 name=surface -write '" + path + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  FieldOptions options;
+  const auto fields = fields_from_level_set(path, "", sphere_mesh(), options);
+  EXPECT_FALSE(fields->stats().notices.empty());
+  const double h = fields->voxel_size();
+  EXPECT_NEAR(h, 0.015625, 1e-9);
+  auto probe = fields->probe();
+  // First-order fast sweeping: within a few voxels at the centre, exact near the surface.
+  EXPECT_NEAR(probe->phi({0, 0, 0}), -kRadius, 3.0 * h);
+  EXPECT_NEAR(probe->phi({0.45, 0, 0}), -0.05, 0.5 * h);
+  EXPECT_GT(probe->flux({0, 0, 0}), 0.5);
+}
+
+}  // namespace
+}  // namespace vdb_shell

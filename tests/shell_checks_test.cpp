@@ -1,0 +1,334 @@
+// shell_checks_test.cpp — check_shell() on valid shells (nothing reported) and on shells broken
+// one way at a time (each problem caught and located); the point-in-surface and tet-overlap
+// predicates on touching and degenerate configurations; determinism and speed.
+#include <gtest/gtest.h>
+
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <random>
+#include <string>
+#include <utility>
+
+#include "assets/shapes.h"
+#include "core/assemble.h"
+#include "core/errors.h"
+#include "core/shell_checks.h"
+
+namespace vdb_shell {
+namespace {
+
+/// The shell between `s` and the inner vertices inner(p) of its points p.
+template <class Inner>
+TetMesh mapped_shell(const SurfaceMesh& s, const Inner& inner) {
+  ShellInput in;
+  for (std::size_t v = 0; v < s.points.size(); ++v) {
+    in.inner_points.push_back(inner(s.points[v]));
+    in.inner_id.push_back(static_cast<std::uint32_t>(v));
+  }
+  return assemble_shell(s, in).mesh;
+}
+
+/// The shell between `s` and its copy scaled by `factor` about the origin (the shapes' centre).
+TetMesh scaled_shell(const SurfaceMesh& s, double factor) {
+  return mapped_shell(s, [factor](const Vec3d& p) { return p * factor; });
+}
+
+/// The torus's shell: every point moved halfway towards the tube's core circle.
+TetMesh torus_shell(const SurfaceMesh& s) {
+  return mapped_shell(s, [](const Vec3d& p) {
+    const Vec3d core = normalized(Vec3d{p.x, p.y, 0.0}) * 0.35;
+    return core + (p - core) * 0.5;
+  });
+}
+
+void expect_nothing_reported(const ShellCheckResult& r) {
+  EXPECT_EQ(r.inverted_tets, 0u);
+  EXPECT_EQ(r.zero_volume_tets, 0u);
+  EXPECT_EQ(r.outside_inner_vertices, 0u);
+  EXPECT_EQ(r.moved_surface_points, 0u);
+  EXPECT_EQ(r.missing_triangles, 0u);
+  EXPECT_EQ(r.shared_triangles, 0u);
+  EXPECT_EQ(r.misoriented_triangles, 0u);
+  EXPECT_EQ(r.nonmanifold_faces, 0u);
+  EXPECT_EQ(r.overlapping_pairs, 0u);
+  EXPECT_FALSE(r.too_many_tets);
+  EXPECT_TRUE(r.valid());
+  EXPECT_EQ(describe_problems(r), "");
+}
+
+/// A mesh of the given tets over the given points, checked for overlaps only.
+std::size_t overlapping_pairs(const std::vector<Vec3d>& points, const std::vector<Tet>& tets) {
+  TetMesh m;
+  m.points = points;
+  m.tets = tets;
+  m.inner.assign(points.size(), 0);
+  return check_shell(SurfaceMesh{}, m).overlapping_pairs;
+}
+
+const Vec3d kA{0, 0, 0}, kB{1, 0, 0}, kC{0, 1, 0}, kD{0, 0, 1};
+
+TEST(ShellChecks, ValidShellsReportNothing) {
+  for (const auto& [name, detail] : {std::pair<const char*, int>{"box", 2}, {"sphere", 2},
+                                     {"cylinder", 1}, {"torus", 1}}) {
+    SCOPED_TRACE(name);
+    const SurfaceMesh s = make_shape(name, detail);
+    // The torus is not star-shaped about its centre: shrink its tube instead.
+    const TetMesh m = std::string(name) == "torus" ? torus_shell(s) : scaled_shell(s, 0.5);
+    const ShellCheckResult r = check_shell(s, m);
+    expect_nothing_reported(r);
+    EXPECT_TRUE(r.overlaps_checked);
+    EXPECT_GT(r.overlap_candidate_pairs, m.tets.size());
+    EXPECT_EQ(r.checked_inner_vertices, s.points.size());
+    EXPECT_EQ(r.tets, 3 * s.num_faces());
+  }
+}
+
+TEST(ShellChecks, SwappedTetIsInverted) {
+  const SurfaceMesh s = make_shape("box", 1);
+  TetMesh m = scaled_shell(s, 0.5);
+  std::swap(m.tets[7][2], m.tets[7][3]);
+  const ShellCheckResult r = check_shell(s, m);
+  EXPECT_EQ(r.inverted_tets, 1u);
+  EXPECT_EQ(r.first_inverted_tets, std::vector<std::uint32_t>{7});
+  EXPECT_EQ(r.zero_volume_tets, 0u);
+  EXPECT_EQ(r.overlapping_pairs, 0u);  // the same point set: still no overlap
+  EXPECT_FALSE(r.valid());
+  EXPECT_NE(describe_problems(r).find("1 inverted tets (first: 7)"), std::string::npos);
+}
+
+TEST(ShellChecks, HandMadeInvertedAndFlatTets) {
+  TetMesh m;
+  m.points = {kA, kB, kC, kD, {1, 1, 0}};
+  m.tets = {{0, 1, 2, 3}, {0, 2, 1, 3}, {0, 1, 2, 4}, {0, 1, 1, 3}};
+  m.inner.assign(m.points.size(), 0);
+  ShellCheckOptions options;
+  options.check_overlaps = false;
+  const ShellCheckResult r = check_shell(SurfaceMesh{}, m, options);
+  EXPECT_EQ(r.inverted_tets, 1u);
+  EXPECT_EQ(r.first_inverted_tets, std::vector<std::uint32_t>{1});
+  EXPECT_EQ(r.zero_volume_tets, 2u);
+  EXPECT_EQ(r.first_zero_volume_tets, (std::vector<std::uint32_t>{2, 3}));
+  EXPECT_FALSE(r.overlaps_checked);
+}
+
+TEST(ShellChecks, InnerVertexPushedOutsideIsCaught) {
+  const SurfaceMesh s = make_shape("box", 1);
+  TetMesh m = scaled_shell(s, 0.5);
+  const std::size_t n = s.points.size();
+  // Surface vertex 0's inner vertex, pushed far beyond its corner.
+  m.points[n] = s.points[0] * 1.6;
+  const ShellCheckResult r = check_shell(s, m);
+  EXPECT_EQ(r.outside_inner_vertices, 1u);
+  EXPECT_EQ(r.first_outside_vertices, std::vector<std::uint32_t>{static_cast<std::uint32_t>(n)});
+  EXPECT_GT(r.inverted_tets, 0u);
+  EXPECT_FALSE(r.valid());
+}
+
+TEST(ShellChecks, InnerVertexOnTheSurfaceIsNotOutside) {
+  const SurfaceMesh s = make_shape("box", 1);
+  TetMesh m = scaled_shell(s, 0.5);
+  const std::size_t n = s.points.size();
+  m.points[n] = s.points[0];  // zero thickness at vertex 0
+  const ShellCheckResult r = check_shell(s, m);
+  EXPECT_EQ(r.outside_inner_vertices, 0u);
+  EXPECT_GT(r.zero_volume_tets, 0u);
+}
+
+TEST(ShellChecks, PointInBoxOnFacesEdgesAndCorners) {
+  // The box's vertices lie on a grid of step 0.5: axis rays through grid points hit vertices
+  // and edges, which forces the ambiguous paths.
+  const SurfaceMesh s = make_shape("box", 1);
+  const double tol = 1e-9;
+  for (double x : {-0.5, -0.25, 0.0, 0.25, 0.5})
+    for (double y : {-0.5, -0.25, 0.0, 0.25, 0.5})
+      for (double z : {-0.5, -0.25, 0.0, 0.25, 0.5}) {
+        EXPECT_FALSE(point_outside_surface(s, {x, y, z}, tol)) << x << " " << y << " " << z;
+        const Vec3d out{x >= 0.0 ? 0.5 + 1e-6 : -0.5 - 1e-6, y, z};
+        EXPECT_TRUE(point_outside_surface(s, out, tol)) << out.x << " " << y << " " << z;
+      }
+  EXPECT_TRUE(point_outside_surface(s, {3, 0, 0}, tol));
+  EXPECT_TRUE(point_outside_surface(s, {0.5 + 1e-7, 0.5, 0.5}, tol));
+  EXPECT_FALSE(point_outside_surface(s, {0.5 - 1e-7, 0.5 - 1e-7, 0.5 - 1e-7}, tol));
+}
+
+TEST(ShellChecks, PointInSphereAgreesWithRadius) {
+  const SurfaceMesh s = make_shape("sphere", 2);  // inscribed in radius 0.5
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-0.7, 0.7);
+  int tested = 0;
+  for (int i = 0; i < 2000; ++i) {
+    const Vec3d p{u(rng), u(rng), u(rng)};
+    const double r = norm(p);
+    if (r > 0.49 && r <= 0.5) continue;  // between the facets and the sphere
+    ++tested;
+    EXPECT_EQ(point_outside_surface(s, p, 1e-9), r > 0.5) << r;
+  }
+  EXPECT_GT(tested, 1500);
+  // Exactly on the axis, through the poles (vertices of many triangles).
+  EXPECT_FALSE(point_outside_surface(s, {0, 0, 0.2}, 1e-9));
+  EXPECT_TRUE(point_outside_surface(s, {0, 0, 0.6}, 1e-9));
+}
+
+TEST(ShellChecks, MissingSharedAndMisorientedTriangles) {
+  const SurfaceMesh s = make_shape("box", 1);
+  const TetMesh valid = scaled_shell(s, 0.5);
+  // The tet holding input triangle 3 (one of triangle 3's three tets).
+  auto holder = [&](std::size_t f) {
+    const Triangle& t = s.triangles[f];
+    for (std::size_t i = 3 * f; i < 3 * f + 3; ++i) {
+      const Tet& q = valid.tets[i];
+      if (std::count(q.begin(), q.end(), t[0]) && std::count(q.begin(), q.end(), t[1]) &&
+          std::count(q.begin(), q.end(), t[2]))
+        return i;
+    }
+    return std::size_t{0};
+  };
+  {
+    TetMesh m = valid;
+    m.tets.erase(m.tets.begin() + static_cast<std::ptrdiff_t>(holder(3)));
+    const ShellCheckResult r = check_shell(s, m);
+    EXPECT_EQ(r.missing_triangles, 1u);
+    EXPECT_EQ(r.first_missing_triangles, std::vector<std::uint32_t>{3});
+  }
+  {
+    TetMesh m = valid;
+    m.tets.push_back(m.tets[holder(5)]);
+    const ShellCheckResult r = check_shell(s, m);
+    EXPECT_EQ(r.shared_triangles, 1u);
+    EXPECT_EQ(r.first_shared_triangles, std::vector<std::uint32_t>{5});
+    EXPECT_GT(r.nonmanifold_faces, 0u);
+    EXPECT_EQ(r.overlapping_pairs, 1u);
+    ASSERT_EQ(r.first_overlapping_pairs.size(), 1u);
+    EXPECT_EQ(r.first_overlapping_pairs[0][1], m.tets.size() - 1);
+  }
+  {
+    TetMesh m = valid;
+    Tet& t = m.tets[holder(2)];
+    std::swap(t[0], t[1]);
+    const ShellCheckResult r = check_shell(s, m);
+    EXPECT_EQ(r.misoriented_triangles, 1u);
+    EXPECT_EQ(r.first_misoriented_triangles, std::vector<std::uint32_t>{2});
+    EXPECT_EQ(r.inverted_tets, 1u);
+  }
+  {
+    TetMesh m = valid;
+    m.points[4].x += 1e-3;
+    const ShellCheckResult r = check_shell(s, m);
+    EXPECT_EQ(r.moved_surface_points, 1u);
+    EXPECT_EQ(r.first_moved_surface_points, std::vector<std::uint32_t>{4});
+  }
+}
+
+TEST(ShellChecks, OverlappingPairIsCaught) {
+  std::vector<Vec3d> p = {kA, kB, kC, kD};
+  for (const Vec3d& x : {kA, kB, kC, kD}) p.push_back(x + Vec3d{0.2, 0.2, 0.2});
+  TetMesh m;
+  m.points = p;
+  m.tets = {{0, 1, 2, 3}, {4, 5, 6, 7}};
+  const ShellCheckResult r = check_shell(SurfaceMesh{}, m);
+  EXPECT_EQ(r.overlapping_pairs, 1u);
+  ASSERT_EQ(r.first_overlapping_pairs.size(), 1u);
+  EXPECT_EQ(r.first_overlapping_pairs[0], (std::array<std::uint32_t, 2>{0, 1}));
+  EXPECT_NE(describe_problems(r).find("1 overlapping tet pairs (first: (0, 1))"),
+            std::string::npos);
+}
+
+TEST(ShellChecks, TouchingTetsDoNotOverlap) {
+  const Vec3d e{1, 1, 1};  // beyond face (B, C, D) of the corner tet
+  // Sharing a face, on opposite sides.
+  EXPECT_EQ(overlapping_pairs({kA, kB, kC, kD, e}, {{0, 1, 2, 3}, {4, 1, 3, 2}}), 0u);
+  // Sharing a face, folded onto the same side.
+  EXPECT_EQ(overlapping_pairs({kA, kB, kC, kD, {0.1, 0.1, 0.1}}, {{0, 1, 2, 3}, {4, 1, 2, 3}}),
+            1u);
+  // Sharing an edge (B, C), apart.
+  EXPECT_EQ(overlapping_pairs({kA, kB, kC, kD, e, {1, 1, -1}}, {{0, 1, 2, 3}, {1, 2, 4, 5}}), 0u);
+  // Sharing a vertex (B), apart, and sharing it while poking into the other.
+  EXPECT_EQ(overlapping_pairs({kA, kB, kC, kD, {2, 0, 0}, {2, 1, 0}, {2, 0, 1}},
+                              {{0, 1, 2, 3}, {1, 4, 5, 6}}),
+            0u);
+  EXPECT_EQ(overlapping_pairs({kA, kB, kC, kD, {0.1, 0.1, 0.1}, {2, 1, 0}, {2, 0, 1}},
+                              {{0, 1, 2, 3}, {1, 4, 5, 6}}),
+            1u);
+  // Face against face without shared vertices (a smaller tet on face (A, B, C), below it).
+  EXPECT_EQ(overlapping_pairs({kA, kB, kC, kD, {0.1, 0.1, 0}, {0.5, 0.1, 0}, {0.1, 0.5, 0},
+                               {0.2, 0.2, -1}},
+                              {{0, 1, 2, 3}, {4, 6, 5, 7}}),
+            0u);
+  // The same, lifted a little into the first tet.
+  EXPECT_EQ(overlapping_pairs({kA, kB, kC, kD, {0.1, 0.1, 1e-3}, {0.5, 0.1, 1e-3},
+                               {0.1, 0.5, 1e-3}, {0.2, 0.2, -1}},
+                              {{0, 1, 2, 3}, {4, 6, 5, 7}}),
+            1u);
+  // Far apart: never a candidate.
+  EXPECT_EQ(overlapping_pairs({kA, kB, kC, kD, {5, 5, 5}, {6, 5, 5}, {5, 6, 5}, {5, 5, 6}},
+                              {{0, 1, 2, 3}, {4, 5, 6, 7}}),
+            0u);
+}
+
+TEST(ShellChecks, ThrowsOnBadIndices) {
+  TetMesh m;
+  m.points = {kA, kB, kC};
+  m.tets = {{0, 1, 2, 3}};
+  EXPECT_THROW(check_shell(SurfaceMesh{}, m), InputError);
+  m.points.push_back(kD);
+  m.inner = {0, 1};
+  EXPECT_THROW(check_shell(SurfaceMesh{}, m), InputError);
+}
+
+TEST(ShellChecks, TooManyTets) {
+  const SurfaceMesh s = make_shape("box", 1);
+  TetMesh m = scaled_shell(s, 0.5);
+  ShellCheckOptions options;
+  options.check_overlaps = false;
+  EXPECT_FALSE(check_shell(s, m, options).too_many_tets);
+  m.tets.push_back(m.tets[0]);
+  EXPECT_TRUE(check_shell(s, m, options).too_many_tets);
+}
+
+TEST(ShellChecks, SameResultForAnyThreadCount) {
+  const SurfaceMesh s = make_shape("sphere", 2);
+  TetMesh m = scaled_shell(s, 0.5);
+  // Break it in several places: shuffled inner vertices invert and overlap prisms.
+  const std::size_t n = s.points.size();
+  for (std::size_t v = 0; v < n; v += 97) m.points[n + v] = m.points[n + (v * 7 + 13) % n];
+  ShellCheckOptions options;
+  options.max_listed = std::numeric_limits<std::size_t>::max();
+  ShellCheckResult serial;
+  {
+    tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+    serial = check_shell(s, m, options);
+  }
+  const ShellCheckResult parallel = check_shell(s, m, options);
+  EXPECT_GT(serial.overlapping_pairs, 0u);
+  EXPECT_GT(serial.inverted_tets, 0u);
+  EXPECT_EQ(serial.overlapping_pairs, parallel.overlapping_pairs);
+  EXPECT_EQ(serial.first_overlapping_pairs, parallel.first_overlapping_pairs);
+  EXPECT_EQ(serial.first_overlapping_pairs.size(), serial.overlapping_pairs);
+  EXPECT_EQ(serial.first_inverted_tets, parallel.first_inverted_tets);
+  EXPECT_EQ(serial.first_zero_volume_tets, parallel.first_zero_volume_tets);
+  EXPECT_EQ(serial.first_outside_vertices, parallel.first_outside_vertices);
+  EXPECT_EQ(serial.overlap_candidate_pairs, parallel.overlap_candidate_pairs);
+  EXPECT_EQ(describe_problems(serial), describe_problems(parallel));
+}
+
+TEST(ShellChecks, FortyThousandTetsInUnderASecond) {
+  // Sphere at detail 4: 12,640 triangles, 37,920 tets.
+  const SurfaceMesh s = make_shape("sphere", 4);
+  for (const double factor : {0.5, 0.9}) {
+    const TetMesh m = scaled_shell(s, factor);
+    const ShellCheckResult r = check_shell(s, m);
+    expect_nothing_reported(r);
+    std::printf("[ check_shell ] %zu tets, inner = %.1f x outer: %.3f s (overlaps %.3f s, "
+                "%zu candidate pairs)\n",
+                r.tets, factor, r.seconds, r.overlap_seconds, r.overlap_candidate_pairs);
+    // Generous for loaded machines; the report above gives the real figure.
+    EXPECT_LT(r.seconds, 5.0);
+  }
+}
+
+}  // namespace
+}  // namespace vdb_shell
