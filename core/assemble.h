@@ -12,7 +12,9 @@
 //
 // Welding: several surface vertices may share one inner vertex. Tets whose four vertices are
 // then no longer distinct are dropped (Dompierre et al.'s post-processing); a prism whose three
-// inner vertices are one point keeps exactly one tet, (a, b, c) with the apex.
+// inner vertices are one point keeps exactly one tet, (a, b, c) with the apex. A prism with two
+// welded inner corners keeps one or two tets; whether its neighbours across the collapsed side
+// still meet it face to face depends on where the welded vertex lies — check_shell() tells.
 //
 // Orientation: the vertex order of every tet is fixed combinatorially — from its place in the
 // prism, never from computed coordinates — such that the tet is positive (tet_volume > 0,

@@ -296,6 +296,47 @@ bool geometries_overlap(const TetGeometry& a, const TetGeometry& b, double toler
   return true;
 }
 
+// Whether triangle t crosses the interior of tet g (separating axes: the triangle's normal, the
+// tet's face normals, the 18 cross products of their edges).
+bool triangle_crosses_tet(const std::array<Vec3d, 3>& t, const TetGeometry& g, double tolerance) {
+  const auto interval = [](const Vec3d& axis, const Vec3d* p, int count, double& lo,
+                           double& hi) {
+    lo = hi = dot(axis, p[0]);
+    for (int k = 1; k < count; ++k) {
+      const double x = dot(axis, p[k]);
+      lo = std::min(lo, x);
+      hi = std::max(hi, x);
+    }
+  };
+  double a_lo, a_hi, b_lo, b_hi;
+  for (int k = 0; k < 4; ++k) {
+    if (!(norm2(g.n[k]) > 0.0)) continue;
+    interval(g.n[k], t.data(), 3, b_lo, b_hi);
+    if (b_hi <= g.lo[k] + tolerance || g.hi[k] <= b_lo + tolerance) return false;
+  }
+  const Vec3d e[3] = {t[1] - t[0], t[2] - t[1], t[0] - t[2]};
+  const Vec3d normal = cross(e[0], t[2] - t[0]);
+  if (norm2(normal) > 0.0) {
+    const Vec3d axis = normalized(normal);
+    const double plane = dot(axis, t[0]);
+    interval(axis, g.p.data(), 4, b_lo, b_hi);
+    if (b_hi <= plane + tolerance || plane <= b_lo + tolerance) return false;
+  }
+  for (const Vec3d& da : e) {
+    for (const auto& eb : kTetEdge) {
+      const Vec3d db = g.p[eb[1]] - g.p[eb[0]];
+      const Vec3d m = cross(da, db);
+      const double len2 = norm2(m);
+      if (!(len2 > 1e-24 * norm2(da) * norm2(db))) continue;
+      const Vec3d axis = m / std::sqrt(len2);
+      interval(axis, t.data(), 3, a_lo, a_hi);
+      interval(axis, g.p.data(), 4, b_lo, b_hi);
+      if (b_hi <= a_lo + tolerance || a_hi <= b_lo + tolerance) return false;
+    }
+  }
+  return true;
+}
+
 bool boxes_overlap(const BBox& a, const BBox& b) {
   return a.lo.x <= b.hi.x && b.lo.x <= a.hi.x && a.lo.y <= b.hi.y && b.lo.y <= a.hi.y &&
          a.lo.z <= b.hi.z && b.lo.z <= a.hi.z;
@@ -322,13 +363,45 @@ class TetGrid {
       dims_[a] = std::max(1L, static_cast<long>(std::ceil((box_.hi[a] - box_.lo[a]) * inv_cell_)));
   }
 
-  // Cells of tet t, appended to `out` (increasing order); returns how many.
+  // Cells of tet t, written to `out` (when not null) in increasing order; returns how many.
   std::size_t cells_of(std::size_t t, std::uint32_t* out) const {
     const TetGeometry& g = geo_[t];
+    return cells_in(g.box, out, [&](const Vec3d& centre, double reach_scale) {
+      for (int f = 0; f < 4; ++f) {
+        const Vec3d& n = g.n[f];
+        const double c = dot(n, centre);
+        const double reach = reach_scale * (std::abs(n.x) + std::abs(n.y) + std::abs(n.z));
+        if (c - reach > g.hi[f] || c + reach < g.lo[f]) return false;
+      }
+      return true;
+    });
+  }
+
+  // Cells that triangle t may intersect, as cells_of().
+  std::size_t cells_of_triangle(const std::array<Vec3d, 3>& t, std::uint32_t* out) const {
+    BBox box;
+    for (const Vec3d& p : t) box.expand(p);
+    const Vec3d n = normalized(cross(t[1] - t[0], t[2] - t[0]));
+    const double plane = dot(n, t[0]);
+    return cells_in(box, out, [&](const Vec3d& centre, double reach_scale) {
+      const double reach = reach_scale * (std::abs(n.x) + std::abs(n.y) + std::abs(n.z));
+      return std::abs(dot(n, centre) - plane) <= reach;
+    });
+  }
+
+  std::size_t num_cells() const {
+    return static_cast<std::size_t>(dims_[0]) * static_cast<std::size_t>(dims_[1]) *
+           static_cast<std::size_t>(dims_[2]);
+  }
+
+ private:
+  // Cells of `box` (clamped to the grid) for which keep(centre, half side) holds.
+  template <class Keep>
+  std::size_t cells_in(const BBox& box, std::uint32_t* out, const Keep& keep) const {
     long lo[3], hi[3];
     for (int a = 0; a < 3; ++a) {
-      lo[a] = cell_of(g.box.lo[a], a);
-      hi[a] = cell_of(g.box.hi[a], a);
+      lo[a] = cell_of(box.lo[a], a);
+      hi[a] = cell_of(box.hi[a], a);
     }
     const double r = 0.5 * cell_;
     std::size_t count = 0;
@@ -338,34 +411,13 @@ class TetGrid {
           const Vec3d centre = box_.lo + Vec3d{(static_cast<double>(i) + 0.5) * cell_,
                                                (static_cast<double>(j) + 0.5) * cell_,
                                                (static_cast<double>(k) + 0.5) * cell_};
-          bool separated = false;
-          for (int f = 0; f < 4 && !separated; ++f) {
-            const Vec3d& n = g.n[f];
-            const double c = dot(n, centre);
-            const double reach = r * (std::abs(n.x) + std::abs(n.y) + std::abs(n.z));
-            separated = c - reach > g.hi[f] || c + reach < g.lo[f];
-          }
-          if (separated) continue;
+          if (!keep(centre, r)) continue;
           if (out) out[count] = static_cast<std::uint32_t>((i * dims_[1] + j) * dims_[2] + k);
           ++count;
         }
     return count;
   }
 
-  std::size_t bbox_cells(std::size_t t) const {
-    const TetGeometry& g = geo_[t];
-    std::size_t count = 1;
-    for (int a = 0; a < 3; ++a)
-      count *= static_cast<std::size_t>(cell_of(g.box.hi[a], a) - cell_of(g.box.lo[a], a) + 1);
-    return count;
-  }
-
-  std::size_t num_cells() const {
-    return static_cast<std::size_t>(dims_[0]) * static_cast<std::size_t>(dims_[1]) *
-           static_cast<std::size_t>(dims_[2]);
-  }
-
- private:
   long cell_of(double x, int a) const {
     return std::clamp(static_cast<long>(std::floor((x - box_.lo[a]) * inv_cell_)), 0L,
                       dims_[a] - 1);
@@ -409,10 +461,13 @@ double grid_cell_size(const std::vector<TetGeometry>& geo) {
   return h;
 }
 
-void check_overlaps(const TetMesh& mesh, const ShellCheckOptions& options,
-                    ShellCheckResult& result) {
+// Tet-tet overlaps, and tets reaching outside the surface: crossed by a surface triangle, or
+// with their centroid outside.
+void check_tet_intersections(const SurfaceMesh& surface, const TetMesh& mesh,
+                             const InsideTester& inside, const ShellCheckOptions& options,
+                             ShellCheckResult& result) {
   const std::size_t n = mesh.tets.size();
-  if (n < 2) return;
+  if (n == 0) return;
   std::vector<TetGeometry> geo(n);
   for_each_chunk(
       n,
@@ -443,36 +498,38 @@ void check_overlaps(const TetMesh& mesh, const ShellCheckOptions& options,
         cell_tets[fill[tet_cells[k]]++] = static_cast<std::uint32_t>(t);
   }
 
-  // Narrow phase: every tet against the later tets sharing one of its cells.
-  std::vector<OverlapSlot> slots(n);
+  // Narrow phase: every tet against the later tets sharing one of its cells. Each chunk marks
+  // the tets it has met (mark[u] == t + 1) so that a pair sharing several cells is tested once;
+  // chunks of at least n / 32 tets keep the cost of the marks linear in n.
+  std::vector<OverlapSlot> slots(options.check_overlaps ? n : 0);
   for_each_chunk(
-      n,
+      slots.size(),
       [&](std::size_t begin, std::size_t end) {
-        std::vector<std::uint32_t> candidates;
+        std::vector<std::uint32_t> mark(n, 0);
         for (std::size_t t = begin; t != end; ++t) {
-          candidates.clear();
+          const TetGeometry& a = geo[t];
+          OverlapSlot& slot = slots[t];
+          const auto stamp = static_cast<std::uint32_t>(t + 1);
           for (std::uint64_t k = tet_start[t]; k < tet_start[t + 1]; ++k) {
             const std::uint32_t c = tet_cells[k];
             const std::uint32_t* first = cell_tets.data() + cell_start[c];
             const std::uint32_t* last = cell_tets.data() + cell_start[c + 1];
-            for (const std::uint32_t* u = std::upper_bound(first, last, t); u != last; ++u)
-              candidates.push_back(*u);
+            for (const std::uint32_t* it = std::upper_bound(first, last, t); it != last; ++it) {
+              const std::uint32_t u = *it;
+              if (mark[u] == stamp) continue;
+              mark[u] = stamp;
+              const TetGeometry& b = geo[u];
+              if (!boxes_overlap(a.box, b.box)) continue;
+              ++slot.candidates;
+              const double tol = options.overlap_tolerance * std::max(a.max_edge, b.max_edge);
+              if (geometries_overlap(a, b, tol)) slot.partners.push_back(u);
+            }
           }
-          std::sort(candidates.begin(), candidates.end());
-          candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
-          const TetGeometry& a = geo[t];
-          OverlapSlot& slot = slots[t];
-          for (const std::uint32_t u : candidates) {
-            const TetGeometry& b = geo[u];
-            if (!boxes_overlap(a.box, b.box)) continue;
-            ++slot.candidates;
-            const double tol = options.overlap_tolerance * std::max(a.max_edge, b.max_edge);
-            if (geometries_overlap(a, b, tol)) slot.partners.push_back(u);
-          }
+          std::sort(slot.partners.begin(), slot.partners.end());
         }
       },
-      64);
-  for (std::size_t t = 0; t < n; ++t) {
+      std::max<std::size_t>(1024, n / 32));
+  for (std::size_t t = 0; t < slots.size(); ++t) {
     OverlapSlot& slot = slots[t];
     result.overlap_candidate_pairs += slot.candidates;
     result.overlapping_pairs += slot.partners.size();
@@ -480,6 +537,60 @@ void check_overlaps(const TetMesh& mesh, const ShellCheckOptions& options,
       if (result.first_overlapping_pairs.size() < options.max_listed)
         result.first_overlapping_pairs.push_back({static_cast<std::uint32_t>(t), u});
   }
+  result.overlaps_checked = options.check_overlaps;
+  if (!options.check_leaks) return;
+
+  // Leaks: every surface triangle against the tets sharing one of its cells, then the centroids.
+  const std::size_t n_faces = surface.triangles.size();
+  BBox grid_box;
+  for (const TetGeometry& g : geo) {
+    grid_box.expand(g.box.lo);
+    grid_box.expand(g.box.hi);
+  }
+  std::vector<std::vector<std::uint32_t>> crossed(n_faces);
+  for_each_chunk(
+      n_faces,
+      [&](std::size_t begin, std::size_t end) {
+        std::vector<std::uint32_t> mark(n, 0);
+        std::vector<std::uint32_t> cells;
+        for (std::size_t f = begin; f != end; ++f) {
+          const Triangle& tri = surface.triangles[f];
+          const std::array<Vec3d, 3> t = {surface.points[tri[0]], surface.points[tri[1]],
+                                          surface.points[tri[2]]};
+          BBox box;
+          for (const Vec3d& p : t) box.expand(p);
+          if (!boxes_overlap(box, grid_box)) continue;
+          cells.resize(grid.cells_of_triangle(t, nullptr));
+          grid.cells_of_triangle(t, cells.data());
+          const auto stamp = static_cast<std::uint32_t>(f + 1);
+          for (const std::uint32_t c : cells) {
+            for (std::uint64_t k = cell_start[c]; k < cell_start[c + 1]; ++k) {
+              const std::uint32_t u = cell_tets[k];
+              if (mark[u] == stamp) continue;
+              mark[u] = stamp;
+              const TetGeometry& g = geo[u];
+              if (!boxes_overlap(box, g.box)) continue;
+              if (triangle_crosses_tet(t, g, options.overlap_tolerance * g.max_edge))
+                crossed[f].push_back(u);
+            }
+          }
+        }
+      },
+      std::max<std::size_t>(1024, n_faces / 32));
+  std::vector<std::uint8_t> leaking(n, 0);
+  for_each_index(n, [&](std::size_t t) {
+    const TetGeometry& g = geo[t];
+    leaking[t] = inside.outside((g.p[0] + g.p[1] + g.p[2] + g.p[3]) * 0.25) ? 1 : 0;
+  });
+  for (const std::vector<std::uint32_t>& list : crossed)
+    for (const std::uint32_t t : list) leaking[t] = 1;
+  for (std::size_t t = 0; t < n; ++t) {
+    if (leaking[t]) {
+      ++result.leaking_tets;
+      list_item(result.first_leaking_tets, options.max_listed, t);
+    }
+  }
+  result.leaks_checked = true;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -563,7 +674,7 @@ bool ShellCheckResult::valid() const {
   return inverted_tets == 0 && zero_volume_tets == 0 && outside_inner_vertices == 0 &&
          moved_surface_points == 0 && missing_triangles == 0 && shared_triangles == 0 &&
          misoriented_triangles == 0 && nonmanifold_faces == 0 && overlapping_pairs == 0 &&
-         !too_many_tets;
+         leaking_tets == 0 && !too_many_tets;
 }
 
 ShellCheckResult check_shell(const SurfaceMesh& surface, const TetMesh& mesh,
@@ -576,6 +687,10 @@ ShellCheckResult check_shell(const SurfaceMesh& surface, const TetMesh& mesh,
         throw InputError("check_shell: tet " + std::to_string(t) + " refers to point " +
                          std::to_string(v) + ", but the tet mesh has " +
                          std::to_string(n_points) + " points");
+  for (std::size_t v = 0; v < n_points; ++v)
+    if (!is_finite(mesh.points[v]))
+      throw InputError("check_shell: point " + std::to_string(v) +
+                       " of the tet mesh has a NaN or infinite coordinate");
   if (!mesh.inner.empty() && mesh.inner.size() != n_points)
     throw InputError("check_shell: " + std::to_string(mesh.inner.size()) + " inner flags for " +
                      std::to_string(n_points) + " points; give one per point or none");
@@ -625,14 +740,14 @@ ShellCheckResult check_shell(const SurfaceMesh& surface, const TetMesh& mesh,
   }
 
   // Inner points inside.
+  const InsideTester tester(surface,
+                            options.on_surface_tolerance * bounding_box(surface).diagonal());
   std::vector<std::uint32_t> inner_points;
   for (std::size_t v = 0; v < n_points; ++v)
     if (mesh.inner.empty() ? v >= n_surface : mesh.inner[v] != 0)
       inner_points.push_back(static_cast<std::uint32_t>(v));
   result.checked_inner_vertices = inner_points.size();
   if (!inner_points.empty()) {
-    const InsideTester tester(surface,
-                              options.on_surface_tolerance * bounding_box(surface).diagonal());
     std::vector<std::uint8_t> outside(inner_points.size(), 0);
     for_each_index(inner_points.size(), [&](std::size_t i) {
       outside[i] = tester.outside(mesh.points[inner_points[i]]) ? 1 : 0;
@@ -647,11 +762,10 @@ ShellCheckResult check_shell(const SurfaceMesh& surface, const TetMesh& mesh,
 
   check_faces(surface, mesh, options, result);
 
-  if (options.check_overlaps) {
-    const auto overlap_start = std::chrono::steady_clock::now();
-    check_overlaps(mesh, options, result);
-    result.overlaps_checked = true;
-    result.overlap_seconds = seconds_since(overlap_start);
+  if (options.check_overlaps || options.check_leaks) {
+    const auto intersection_start = std::chrono::steady_clock::now();
+    check_tet_intersections(surface, mesh, tester, options, result);
+    result.intersection_seconds = seconds_since(intersection_start);
   }
   result.seconds = seconds_since(start);
   return result;
@@ -682,6 +796,7 @@ std::string describe_problems(const ShellCheckResult& r) {
         << r.first_overlapping_pairs[i][1] << ')';
     s << ")\n";
   }
+  line(r.leaking_tets, "tets reaching outside the surface", r.first_leaking_tets);
   if (r.too_many_tets) s << r.tets << " tets for " << r.faces << " triangles: more than 3 per\n";
   return s.str();
 }

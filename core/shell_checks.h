@@ -18,11 +18,13 @@
 //   * overlapping tet pairs: pairs whose interiors intersect (separating-axis test with a
 //     tolerance). Tets that only touch — sharing a vertex, an edge or a face, or lying against
 //     each other — are not counted;
+//   * leaking tets: tets that reach outside the surface although their vertices may all be
+//     inside or on it — a surface triangle crosses their interior (separating-axis test with
+//     the same tolerance; touching does not count), or their centroid is outside;
 //   * T <= 3F.
 // Lengths are world units; tolerances are relative (dimensionless), as documented per field.
 //
-// Not checked: tets crossing the surface while all their vertices are inside (a concave
-// surface can pass between the vertices of a tet), thickness limits.
+// Not checked: thickness limits (they depend on the trace options).
 //
 // Deterministic: results (counts and listed elements) do not depend on the thread count.
 #pragma once
@@ -50,6 +52,8 @@ struct ShellCheckOptions {
   double overlap_tolerance = 1e-9;
   /// Run the tet-tet overlap test (the most expensive check).
   bool check_overlaps = true;
+  /// Run the leak test (surface triangles crossing tets, centroids outside).
+  bool check_leaks = true;
   /// How many offending elements each list in the result keeps (lowest indices first);
   /// std::numeric_limits<std::size_t>::max() lists all of them.
   std::size_t max_listed = 5;
@@ -86,10 +90,14 @@ struct ShellCheckResult {
   std::vector<std::array<std::uint32_t, 2>> first_overlapping_pairs;  ///< (i, j), i < j
   std::size_t overlap_candidate_pairs = 0;  ///< pairs that reached the narrow phase
 
+  bool leaks_checked = false;
+  std::size_t leaking_tets = 0;  ///< tets crossed by a surface triangle or centroid outside
+  std::vector<std::uint32_t> first_leaking_tets;
+
   bool too_many_tets = false;  ///< T > 3F
 
-  double seconds = 0.0;          ///< wall time of check_shell()
-  double overlap_seconds = 0.0;  ///< of which the overlap test
+  double seconds = 0.0;               ///< wall time of check_shell()
+  double intersection_seconds = 0.0;  ///< of which the overlap and leak tests
 
   /// True when no check failed.
   bool valid() const;
@@ -97,8 +105,8 @@ struct ShellCheckResult {
 
 /// Checks the tet shell `mesh` built on `surface` (see the file comment).
 /// \pre surface is closed and outward oriented (load_surface()).
-/// \throw InputError if a tet refers to a point that does not exist, or mesh.inner is neither
-///        empty nor of one entry per point.
+/// \throw InputError if a tet refers to a point that does not exist, a point is not finite, or
+///        mesh.inner is neither empty nor of one entry per point.
 ShellCheckResult check_shell(const SurfaceMesh& surface, const TetMesh& mesh,
                              const ShellCheckOptions& options = {});
 

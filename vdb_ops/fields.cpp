@@ -789,9 +789,12 @@ class VdbProbe final : public FieldProbe {
     const FloatLeaf* leaves[2][2][2];
     float tiles[2][2][2];
     const Coord lo_leaf = lo & ~(kLeafDim - 1);
-    for (int a = 0; a < 2; ++a)
-      for (int b = 0; b < 2; ++b)
-        for (int c = 0; c < 2; ++c) {
+    // The block spans a second leaf along an axis only when it starts in the leaf's last 3.
+    const int na = (lo[0] & 7) > 4 ? 2 : 1, nb = (lo[1] & 7) > 4 ? 2 : 1,
+              nc = (lo[2] & 7) > 4 ? 2 : 1;
+    for (int a = 0; a < na; ++a)
+      for (int b = 0; b < nb; ++b)
+        for (int c = 0; c < nc; ++c) {
           const Coord o = lo_leaf.offsetBy(a * kLeafDim, b * kLeafDim, c * kLeafDim);
           leaves[a][b][c] = sdf_acc_.probeConstLeaf(o);
           tiles[a][b][c] = leaves[a][b][c] ? 0.0f : sdf_acc_.getValue(o);

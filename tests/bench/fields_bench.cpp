@@ -1,0 +1,324 @@
+// fields_bench.cpp — time and peak memory of the field build (vdb_ops/fields.h), beside OpenVDB's
+// plain narrow-band meshToLevelSet (half-width 3) of the same mesh at the same voxel size.
+//
+// Not part of the test run. Usage:
+//   vdb_shell_bench_fields [--max-resolution N] [--skip-sweeping] [MESH ...]
+// Without MESH it uses ../shared/meshes/fandisk.obj and fertility.off subdivided to 144k faces.
+// Every measurement runs in a forked child, so "peak" is that build's own maximum resident set
+// (minus the parent's resident set at fork time, which the child inherits). Prints Markdown.
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <random>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "assets/shapes.h"
+#include "core/errors.h"
+#include "core/validate.h"
+#include "vdb_ops/fields.h"
+
+namespace vdb_shell {
+namespace {
+
+/// What a child reports back through its pipe.
+struct Sample {
+  double seconds = 0.0;   ///< total build time
+  double sdf = 0.0;       ///< SDF (incl. interior fill)
+  double refine = 0.0;    ///< refinement pass (part of sdf)
+  double flux = 0.0;      ///< flux grid
+  double gradient = 0.0;  ///< gradient grid
+  double active = 0.0;    ///< SDF active voxels
+  double flux_active = 0.0;
+  double grid_mb = 0.0;   ///< memory held by the grids
+  double estimate_mb = 0.0;
+  double peak_mb = 0.0;   ///< child's peak RSS minus the parent's RSS at fork
+  bool ok = false;
+};
+
+double rss_mb_now() {
+  long pages = 0, resident = 0;
+  if (FILE* f = std::fopen("/proc/self/statm", "r")) {
+    if (std::fscanf(f, "%ld %ld", &pages, &resident) != 2) resident = 0;
+    std::fclose(f);
+  }
+  return double(resident) * double(::sysconf(_SC_PAGE_SIZE)) / (1024.0 * 1024.0);
+}
+
+/// VmHWM (peak resident set) of this process, MB.
+double peak_mb_now() {
+  double kb = 0.0;
+  if (FILE* f = std::fopen("/proc/self/status", "r")) {
+    char line[256];
+    while (std::fgets(line, sizeof(line), f)) {
+      if (std::strncmp(line, "VmHWM:", 6) == 0) kb = std::atof(line + 6);
+    }
+    std::fclose(f);
+  }
+  return kb / 1024.0;
+}
+
+template <typename F>
+Sample in_child(F&& f) {
+  int fds[2];
+  if (::pipe(fds) != 0) return {};
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::close(fds[0]);
+    // Reset the peak to the current resident set (Linux >= 4.0), then measure from there.
+    if (FILE* c = std::fopen("/proc/self/clear_refs", "w")) {
+      std::fputs("5", c);
+      std::fclose(c);
+    }
+    const double base = rss_mb_now();
+    Sample s;
+    try {
+      s = f();
+      s.ok = true;
+    } catch (const std::exception& e) {
+      std::cerr << "  (failed: " << e.what() << ")\n";
+    }
+    s.peak_mb = peak_mb_now() - base;
+    if (::write(fds[1], &s, sizeof(s)) != ssize_t(sizeof(s))) ::_exit(1);
+    ::_exit(0);
+  }
+  ::close(fds[1]);
+  Sample s;
+  if (::read(fds[0], &s, sizeof(s)) != ssize_t(sizeof(s))) s.ok = false;
+  ::close(fds[0]);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return s;
+}
+
+Sample from_stats(const FieldStats& st) {
+  Sample s;
+  s.seconds = st.seconds_total;
+  s.sdf = st.seconds_sdf;
+  s.refine = st.seconds_refine;
+  s.flux = st.seconds_flux;
+  s.gradient = st.seconds_gradient;
+  s.active = double(st.sdf_active_voxels);
+  s.flux_active = double(st.flux_active_voxels);
+  s.grid_mb = double(st.grid_bytes) / (1024.0 * 1024.0);
+  s.estimate_mb = double(st.estimated_bytes) / (1024.0 * 1024.0);
+  return s;
+}
+
+/// Midpoint subdivision: every triangle into 4 (same surface, 4x the faces).
+SurfaceMesh subdivide(const SurfaceMesh& in) {
+  SurfaceMesh out;
+  out.points = in.points;
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> mid;
+  auto midpoint = [&](std::uint32_t a, std::uint32_t b) {
+    const auto key = std::minmax(a, b);
+    auto it = mid.find(key);
+    if (it != mid.end()) return it->second;
+    const auto id = std::uint32_t(out.points.size());
+    out.points.push_back((in.points[a] + in.points[b]) * 0.5);
+    mid.emplace(key, id);
+    return id;
+  };
+  for (const Triangle& t : in.triangles) {
+    const std::uint32_t ab = midpoint(t[0], t[1]), bc = midpoint(t[1], t[2]),
+                        ca = midpoint(t[2], t[0]);
+    out.triangles.push_back({t[0], ab, ca});
+    out.triangles.push_back({ab, t[1], bc});
+    out.triangles.push_back({ca, bc, t[2]});
+    out.triangles.push_back({ab, bc, ca});
+  }
+  return out;
+}
+
+void print_row(const std::string& mesh, int res, const std::string& what, const Sample& s,
+               double floor_seconds, double floor_peak) {
+  char line[512];
+  if (!s.ok) {
+    std::snprintf(line, sizeof(line), "| %s | %d | %s | failed | | | | | | | | |", mesh.c_str(),
+                  res, what.c_str());
+  } else {
+    std::snprintf(line, sizeof(line),
+                  "| %s | %d | %s | %.2f | %.2f (%.2f) | %.2f | %.2f | %.1fM | %.2fM | %.0f | %.0f "
+                  "| %.0f | %.2fx / %.2fx |",
+                  mesh.c_str(), res, what.c_str(), s.seconds, s.sdf, s.refine, s.flux, s.gradient,
+                  s.active / 1e6, s.flux_active / 1e6, s.grid_mb, s.estimate_mb, s.peak_mb,
+                  floor_seconds > 0 ? s.seconds / floor_seconds : 0.0,
+                  floor_peak > 0 ? s.peak_mb / floor_peak : 0.0);
+  }
+  std::cout << line << std::endl;
+}
+
+/// ns per gradient + flux query along trace-like paths (one thread): from every 4th vertex,
+/// 400 steps of half a voxel against the gradient (paper eq. 1-2), and at random points.
+std::pair<double, double> query_ns(const Fields& fields, const SurfaceMesh& mesh) {
+  auto probe = fields.probe();
+  const double step = 0.5 * fields.voxel_size();
+  std::size_t n = 0;
+  double sink = 0.0;
+  auto t0 = std::chrono::steady_clock::now();
+  for (std::size_t v = 0; v < mesh.num_vertices(); v += 4) {
+    Vec3d q = mesh.points[v];
+    for (int i = 0; i < 400; ++i, ++n) {
+      Vec3d g = probe->gradient(q);
+      sink += probe->flux(q);
+      const double len = norm(g);
+      if (len > 1.0) g = g / len;
+      q -= step * g;
+    }
+  }
+  const double trace = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
+                           .count() * 1e9 / double(n);
+  const BBox box = bounding_box(mesh);
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<Vec3d> pts(static_cast<std::size_t>(1000000));
+  for (Vec3d& p : pts) {
+    p = {box.lo.x + u(rng) * box.extent().x, box.lo.y + u(rng) * box.extent().y,
+         box.lo.z + u(rng) * box.extent().z};
+  }
+  t0 = std::chrono::steady_clock::now();
+  for (const Vec3d& p : pts) sink += probe->gradient(p).x;
+  const double random = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
+                            .count() * 1e9 / double(pts.size());
+  if (sink == 12345.678) std::cout << "";  // keep the loops
+  return {trace, random};
+}
+
+/// Sphere of radius 0.5 at `res`: worst |phi - (|x| - R)| inside, voxels.
+void sphere_accuracy(SdfMethod method, int res) {
+  const SurfaceMesh mesh = make_shape("sphere", 8);
+  FieldOptions options;
+  options.resolution = res;
+  options.sdf_method = method;
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto fields = build_fields(mesh, options);
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double h = fields->voxel_size();
+  const IndexBox b = fields->active_index_box();
+  double worst = 0.0, sum = 0.0;
+  std::size_t n = 0;
+  for (int i = b.lo[0]; i <= b.hi[0]; ++i)
+    for (int j = b.lo[1]; j <= b.hi[1]; ++j)
+      for (int k = b.lo[2]; k <= b.hi[2]; ++k) {
+        const double r = norm(fields->voxel_center(i, j, k));
+        if (r >= 0.5) continue;
+        const double e = std::abs(fields->phi_at_voxel(i, j, k) - (r - 0.5)) / h;
+        worst = std::max(worst, e);
+        sum += e;
+        ++n;
+      }
+  std::cout << "| sphere R=" << 0.5 / h << " voxels, " << mesh.num_faces() << " faces | " << res
+            << " | " << fields->stats().strategy << " | " << s << " | " << worst << " | "
+            << sum / double(n) << " |" << std::endl;
+}
+
+}  // namespace
+}  // namespace vdb_shell
+
+int main(int argc, char** argv) {
+  using namespace vdb_shell;
+  int max_res = 1024;
+  bool sweeping = true;
+  std::vector<std::string> paths;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--max-resolution" && i + 1 < argc) {
+      max_res = std::atoi(argv[++i]);
+    } else if (a == "--skip-sweeping") {
+      sweeping = false;
+    } else {
+      paths.push_back(a);
+    }
+  }
+  std::vector<std::pair<std::string, SurfaceMesh>> meshes;
+  try {
+    const std::string dir = VDB_SHELL_SHARED_MESHES;
+    if (paths.empty()) {
+      meshes.emplace_back("fandisk", load_surface(dir + "/fandisk.obj").mesh);
+      SurfaceMesh fert = load_surface(dir + "/fertility.off").mesh;
+      meshes.emplace_back("fertility x16", subdivide(subdivide(fert)));
+    } else {
+      for (const std::string& p : paths) {
+        meshes.emplace_back(std::filesystem::path(p).filename().string(), load_surface(p).mesh);
+      }
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "fields_bench: " << e.what() << "\n";
+    return 2;
+  }
+
+  std::cout << "## SDF accuracy (sphere, analytic reference)\n\n"
+            << "| shape | res | strategy | seconds | max error (voxels) | mean error |\n"
+            << "|---|---|---|---|---|---|\n";
+  sphere_accuracy(SdfMethod::kExactInterior, 128);
+  sphere_accuracy(SdfMethod::kFastSweeping, 128);
+
+  std::cout << "\n## Build time and peak memory\n\n"
+            << "peak = the build's own peak RSS (MB); ratio = time / floor time, peak / floor "
+               "peak.\n\n"
+            << "| mesh | res | build | total s | sdf s (refine) | flux s | grad s | sdf active "
+               "| flux active | grids MB | estimate MB | peak MB | ratio |\n"
+            << "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const auto& [name, mesh] : meshes) {
+    const std::string label = name + " (" + std::to_string(mesh.num_faces()) + " f)";
+    for (int res = 128; res <= max_res; res *= 2) {
+      FieldOptions options;
+      options.resolution = res;
+      const Sample floor = in_child([&] {
+        return from_stats(build_narrow_band_reference(mesh, options));
+      });
+      print_row(label, res, "floor: meshToLevelSet hw 3", floor, floor.seconds, floor.peak_mb);
+      const Sample fields = in_child([&] { return from_stats(build_fields(mesh, options)->stats()); });
+      print_row(label, res, "fields (exact interior)", fields, floor.seconds, floor.peak_mb);
+      if (res <= 512) {
+        FieldOptions g = options;
+        g.store_gradient = true;
+        const Sample s = in_child([&] { return from_stats(build_fields(mesh, g)->stats()); });
+        print_row(label, res, "fields + gradient grid", s, floor.seconds, floor.peak_mb);
+      }
+      if (sweeping && res <= 512 && (res <= 256 || name == "fandisk")) {
+        FieldOptions sw = options;
+        sw.sdf_method = SdfMethod::kFastSweeping;
+        const Sample s = in_child([&] { return from_stats(build_fields(mesh, sw)->stats()); });
+        print_row(label, res, "fields (fast sweeping)", s, floor.seconds, floor.peak_mb);
+      }
+    }
+  }
+
+  std::cout << "\n## Probe queries at 512 (one thread)\n\n"
+            << "trace = gradient + flux per step along trace-like paths; random = gradient at "
+               "random points of the bbox.\n\n"
+            << "| mesh | gradient | trace ns / step | random ns / query | all grids MB | build "
+               "peak MB |\n|---|---|---|---|---|---|\n";
+  for (const auto& [name, mesh] : meshes) {
+    for (bool stored : {false, true}) {
+      FieldOptions options;
+      options.resolution = std::min(512, max_res);
+      options.store_gradient = stored;
+      const Sample s = in_child([&] {
+        const auto fields = build_fields(mesh, options);
+        Sample r;
+        const auto ns = query_ns(*fields, mesh);
+        r.seconds = ns.first;
+        r.sdf = ns.second;
+        r.grid_mb = double(fields->stats().grid_bytes) / (1024.0 * 1024.0);
+        return r;
+      });
+      std::cout << "| " << name << " | " << (stored ? "stored Vec3SGrid" : "SDF stencil")
+                << " | " << s.seconds << " | " << s.sdf << " | " << s.grid_mb << " | "
+                << s.peak_mb << " |" << std::endl;
+    }
+  }
+  return 0;
+}
