@@ -5,7 +5,9 @@
 //   vdb_shell_bench_fields [--max-resolution N] [--skip-sweeping] [MESH ...]
 // Without MESH it uses ../shared/meshes/fandisk.obj and fertility.off subdivided to 144k faces.
 // Every measurement runs in a forked child, so "peak" is that build's own maximum resident set
-// (minus the parent's resident set at fork time, which the child inherits). Prints Markdown.
+// (VmHWM, after resetting it through /proc/self/clear_refs where the kernel allows) minus the
+// resident set at fork time. Where the reset is refused the column cannot go below the parent's
+// own peak (~ tens of MB): small values at 128/256 are that floor. Prints Markdown.
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -73,6 +75,8 @@ template <typename F>
 Sample in_child(F&& f) {
   int fds[2];
   if (::pipe(fds) != 0) return {};
+  std::cout.flush();  // or the child would print the parent's buffered output again
+  std::fflush(nullptr);
   const pid_t pid = ::fork();
   if (pid == 0) {
     ::close(fds[0]);
@@ -261,8 +265,15 @@ int main(int argc, char** argv) {
   std::cout << "## SDF accuracy (sphere, analytic reference)\n\n"
             << "| shape | res | strategy | seconds | max error (voxels) | mean error |\n"
             << "|---|---|---|---|---|---|\n";
-  sphere_accuracy(SdfMethod::kExactInterior, 128);
-  sphere_accuracy(SdfMethod::kFastSweeping, 128);
+  // In children too, so that the parent's peak stays low for the memory columns below.
+  in_child([] {
+    sphere_accuracy(SdfMethod::kExactInterior, 128);
+    return Sample{};
+  });
+  in_child([] {
+    sphere_accuracy(SdfMethod::kFastSweeping, 128);
+    return Sample{};
+  });
 
   std::cout << "\n## Build time and peak memory\n\n"
             << "peak = the build's own peak RSS (MB); ratio = time / floor time, peak / floor "
