@@ -26,6 +26,7 @@
 #include "core/shell_checks.h"
 #include "core/trace.h"
 #include "core/validate.h"
+#include "core/validity.h"
 #include "core/writers.h"
 #include "vdb_ops/fields.h"
 
@@ -158,10 +159,20 @@ int run(CliOptions opt, std::ostream& out, std::ostream& err) {
 
   t0 = Clock::now();
   const InnerVertices inner = place_inner_vertices(mesh, traces, opt.thickness);
-  AssembleResult shell = assemble_shell(mesh, inner.input);
-  const ShellCheckResult checks = check_shell(mesh, shell.mesh);
+  const ValidShell valid = make_valid_shell(mesh, traces, inner);
+  const AssembleResult& shell = valid.shell;
+  const ShellCheckResult& checks = valid.checks;
   const QualitySummary quality = summarize_quality(mesh, shell.mesh);
   const double t_assemble = seconds_since(t0);
+  if (!checks.valid()) {
+    std::string problems = describe_problems(checks);
+    std::replace(problems.begin(), problems.end(), '\n', ';');
+    throw InternalError(opt.input + ": could not make the shell valid after " +
+                        std::to_string(valid.rounds) + " rounds (" + problems + ")" +
+                        (valid.floor_valid ? "" : "; the thinnest shell is invalid too: " +
+                                                      valid.floor_problems) +
+                        "; nothing was written — please report this input");
+  }
 
   t0 = Clock::now();
   write_tet_mesh(opt.output, shell.mesh, tet_format_from_path(opt.output, opt.msh_version));
@@ -169,10 +180,10 @@ int run(CliOptions opt, std::ostream& out, std::ostream& err) {
   if (!opt.paths.empty()) write_paths_vtk(opt.paths, traces);
   if (!opt.inner.empty()) {
     SurfaceMesh inner_surface;
-    inner_surface.points = inner.input.inner_points;
+    inner_surface.points = valid.input.inner_points;
     for (const Triangle& t : mesh.triangles)
       inner_surface.triangles.push_back(
-          {inner.input.inner_id[t[0]], inner.input.inner_id[t[2]], inner.input.inner_id[t[1]]});
+          {valid.input.inner_id[t[0]], valid.input.inner_id[t[2]], valid.input.inner_id[t[1]]});
     write_surface(opt.inner, inner_surface);
   }
   t_write = seconds_since(t0);
@@ -212,9 +223,15 @@ int run(CliOptions opt, std::ostream& out, std::ostream& err) {
                 {"missing_surface_triangles", checks.missing_triangles},
                 {"dropped_degenerate_tets", shell.dropped_degenerate_tets},
                 {"collapsed_prisms", shell.collapsed_prisms},
-                {"welded_vertices", inner.welded},
+                {"welded_vertices", inner.welded - std::min(inner.welded, valid.unwelded)},
                 {"thickness_limited_vertices", inner.limited},
                 {"valid", checks.valid()}};
+  j["validity"] = {{"rounds", valid.rounds},
+                   {"moved_back_vertices", valid.moved_back},
+                   {"moved_back_mean_fraction", valid.moved_back_mean},
+                   {"unwelded_vertices", valid.unwelded},
+                   {"floor_valid", valid.floor_valid},
+                   {"seconds", valid.seconds}};
   j["quality"] = {{"min", quality.min_quality},
                   {"median", quality.median_quality},
                   {"mean", quality.mean_quality},
@@ -234,11 +251,6 @@ int run(CliOptions opt, std::ostream& out, std::ostream& err) {
         << fmt(quality.median_quality) << ", stops critical " << traces.count[0] << " merge "
         << traces.count[1] << " flux " << traces.count[2] << " cap " << traces.count[3]
         << ", " << fmt(t_all) << " s\n";
-    if (!checks.valid()) {
-      std::string problems = describe_problems(checks);
-      std::replace(problems.begin(), problems.end(), '\n', ';');
-      err << "vdb_shell: warning: the shell breaks invariants: " << problems << "\n";
-    }
   }
   out << j.dump(2) << "\n";
   return kExitOk;
