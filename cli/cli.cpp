@@ -29,6 +29,7 @@
 #include "core/validity.h"
 #include "core/writers.h"
 #include "vdb_ops/fields.h"
+#include "vdb_ops/point_index_vdb.h"
 
 #ifndef VDB_SHELL_VERSION
 #define VDB_SHELL_VERSION "unknown"
@@ -154,7 +155,7 @@ int run(CliOptions opt, std::ostream& out, std::ostream& err) {
   }
 
   t0 = Clock::now();
-  const TraceResult traces = trace_paths(mesh, *fields, opt.trace);
+  const TraceResult traces = trace_paths(mesh, *fields, opt.trace, make_vdb_point_index);
   const double t_trace = seconds_since(t0);
 
   t0 = Clock::now();
@@ -227,6 +228,7 @@ int run(CliOptions opt, std::ostream& out, std::ostream& err) {
                 {"thickness_limited_vertices", inner.limited},
                 {"valid", checks.valid()}};
   j["validity"] = {{"rounds", valid.rounds},
+                   {"checks", valid.checks_run},
                    {"moved_back_vertices", valid.moved_back},
                    {"moved_back_mean_fraction", valid.moved_back_mean},
                    {"unwelded_vertices", valid.unwelded},

@@ -501,12 +501,17 @@ void check_tet_intersections(const SurfaceMesh& surface, const TetMesh& mesh,
   // Narrow phase: every tet against the later tets sharing one of its cells. Each chunk marks
   // the tets it has met (mark[u] == t + 1) so that a pair sharing several cells is tested once;
   // chunks of at least n / 32 tets keep the cost of the marks linear in n.
+  // With a focus, a focused tet meets every other tet (a pair of two focused tets once, from
+  // its smaller index) and an unfocused tet meets nothing.
+  const std::vector<std::uint8_t>* focus = options.focus;
+  auto focused = [&](std::size_t t) { return !focus || (*focus)[t] != 0; };
   std::vector<OverlapSlot> slots(options.check_overlaps ? n : 0);
   for_each_chunk(
       slots.size(),
       [&](std::size_t begin, std::size_t end) {
         std::vector<std::uint32_t> mark(n, 0);
         for (std::size_t t = begin; t != end; ++t) {
+          if (!focused(t)) continue;
           const TetGeometry& a = geo[t];
           OverlapSlot& slot = slots[t];
           const auto stamp = static_cast<std::uint32_t>(t + 1);
@@ -514,8 +519,10 @@ void check_tet_intersections(const SurfaceMesh& surface, const TetMesh& mesh,
             const std::uint32_t c = tet_cells[k];
             const std::uint32_t* first = cell_tets.data() + cell_start[c];
             const std::uint32_t* last = cell_tets.data() + cell_start[c + 1];
-            for (const std::uint32_t* it = std::upper_bound(first, last, t); it != last; ++it) {
+            for (const std::uint32_t* it = focus ? first : std::upper_bound(first, last, t);
+                 it != last; ++it) {
               const std::uint32_t u = *it;
+              if (u == t || (u < t && focused(u))) continue;
               if (mark[u] == stamp) continue;
               mark[u] = stamp;
               const TetGeometry& b = geo[u];
@@ -547,6 +554,14 @@ void check_tet_intersections(const SurfaceMesh& surface, const TetMesh& mesh,
     grid_box.expand(g.box.lo);
     grid_box.expand(g.box.hi);
   }
+  // With a focus, only cells holding a focused tet can hold a crossing worth reporting.
+  std::vector<std::uint8_t> focus_cell;
+  if (focus) {
+    focus_cell.assign(grid.num_cells(), 0);
+    for (std::size_t t = 0; t < n; ++t)
+      if (focused(t))
+        for (std::uint64_t k = tet_start[t]; k < tet_start[t + 1]; ++k) focus_cell[tet_cells[k]] = 1;
+  }
   std::vector<std::vector<std::uint32_t>> crossed(n_faces);
   for_each_chunk(
       n_faces,
@@ -564,12 +579,13 @@ void check_tet_intersections(const SurfaceMesh& surface, const TetMesh& mesh,
           grid.cells_of_triangle(t, cells.data());
           const auto stamp = static_cast<std::uint32_t>(f + 1);
           for (const std::uint32_t c : cells) {
+            if (focus && !focus_cell[c]) continue;
             for (std::uint64_t k = cell_start[c]; k < cell_start[c + 1]; ++k) {
               const std::uint32_t u = cell_tets[k];
               if (mark[u] == stamp) continue;
               mark[u] = stamp;
               const TetGeometry& g = geo[u];
-              if (!boxes_overlap(box, g.box)) continue;
+              if (!focused(u) || !boxes_overlap(box, g.box)) continue;
               if (triangle_crosses_tet(t, g, options.overlap_tolerance * g.max_edge))
                 crossed[f].push_back(u);
             }
@@ -579,6 +595,7 @@ void check_tet_intersections(const SurfaceMesh& surface, const TetMesh& mesh,
       std::max<std::size_t>(1024, n_faces / 32));
   std::vector<std::uint8_t> leaking(n, 0);
   for_each_index(n, [&](std::size_t t) {
+    if (!focused(t)) return;
     const TetGeometry& g = geo[t];
     leaking[t] = inside.outside((g.p[0] + g.p[1] + g.p[2] + g.p[3]) * 0.25) ? 1 : 0;
   });

@@ -57,6 +57,10 @@ struct ShellCheckOptions {
   /// How many offending elements each list in the result keeps (lowest indices first);
   /// std::numeric_limits<std::size_t>::max() lists all of them.
   std::size_t max_listed = 5;
+  /// When set (one flag per tet): check only the flagged tets — their volumes, leaks, and
+  /// overlaps with any tet — and trust the others (the incremental use of make_valid_shell).
+  /// Faces, surface points and inner points are always checked in full.
+  const std::vector<std::uint8_t>* focus = nullptr;
 };
 
 /// What check_shell() found. Lists hold the first offending elements in index order.

@@ -139,9 +139,13 @@ class ShellSearch {
     return in;
   }
 
-  ShellCheckResult check(const TetMesh& mesh) const {
+  /// Checks `mesh`; with `focus`, only its flagged tets (the others are known to be fine).
+  ShellCheckResult check(const TetMesh& mesh,
+                         const std::vector<std::uint8_t>* focus = nullptr) const {
     ShellCheckOptions o;
     o.max_listed = std::numeric_limits<std::size_t>::max();
+    o.focus = focus;
+    ++checks_run_;
     return check_shell(surface_, mesh, o);
   }
 
@@ -153,7 +157,31 @@ class ShellSearch {
   std::vector<double> full_, floor_;
   std::vector<Vec3d> fallback_, correction_;
   std::vector<std::uint32_t> group_size_;
+
+ public:
+  mutable int checks_run_ = 0;
 };
+
+/// Inner positions of every prism (3 per triangle), to tell which prisms a round changed.
+std::vector<Vec3d> prism_inner_points(const SurfaceMesh& surface, const ShellInput& in) {
+  std::vector<Vec3d> out;
+  out.reserve(surface.triangles.size() * 3);
+  for (const Triangle& t : surface.triangles)
+    for (std::uint32_t v : t) out.push_back(in.inner_points[in.inner_id[v]]);
+  return out;
+}
+
+/// One flag per tet of `mesh`: its prism's inner points differ between `before` and `after`.
+std::vector<std::uint8_t> changed_tets(const TetMesh& mesh, const std::vector<Vec3d>& before,
+                                       const std::vector<Vec3d>& after) {
+  std::vector<std::uint8_t> focus(mesh.tets.size(), 0);
+  for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
+    const std::size_t f = mesh.source_triangle[t];
+    for (int k = 0; k < 3; ++k)
+      if (before[3 * f + k] != after[3 * f + k]) focus[t] = 1;
+  }
+  return focus;
+}
 
 /// Offending tets and inner slots of a check.
 void collect_offenders(const SurfaceMesh& surface, const ShellInput& in, const TetMesh& mesh,
@@ -206,10 +234,18 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
   State s = search.initial();
   std::vector<std::uint32_t> bad_tets, bad_slots;
   std::vector<char> lowered(n);
+  std::vector<Vec3d> previous;
   for (;; ++out.rounds) {
     out.input = search.build(s, members);
     out.shell = assemble_shell(surface, out.input, no_quality);
-    out.checks = search.check(out.shell.mesh);
+    const std::vector<Vec3d> current = prism_inner_points(surface, out.input);
+    if (previous.empty()) {
+      out.checks = search.check(out.shell.mesh);
+    } else {
+      const std::vector<std::uint8_t> focus = changed_tets(out.shell.mesh, previous, current);
+      out.checks = search.check(out.shell.mesh, &focus);
+    }
+    previous = current;
     if (out.checks.valid() || out.rounds >= options.max_rounds) break;
     collect_offenders(surface, out.input, out.shell.mesh, out.checks, bad_tets, bad_slots);
     std::fill(lowered.begin(), lowered.end(), 0);
@@ -263,10 +299,13 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
         }
       if (raised.empty()) break;
       // Undo the raises that offend until the trial is valid (bounded: each undo is final).
+      const std::vector<Vec3d> accepted = prism_inner_points(surface, out.input);
       for (int round = 0; round < options.max_rounds; ++round) {
         ShellInput in = search.build(trial, members);
         AssembleResult shell = assemble_shell(surface, in, no_quality);
-        ShellCheckResult c = search.check(shell.mesh);
+        const std::vector<std::uint8_t> focus =
+            changed_tets(shell.mesh, accepted, prism_inner_points(surface, in));
+        ShellCheckResult c = search.check(shell.mesh, &focus);
         if (c.valid()) {
           s = trial;
           out.input = std::move(in);
@@ -292,7 +331,12 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
     }
   }
 
+  // The incremental checks trusted unchanged tets; the result carries one full check.
   out.shell = assemble_shell(surface, out.input);  // with quality for the report and writers
+  {
+    ShellCheckOptions o;
+    out.checks = check_shell(surface, out.shell.mesh, o);
+  }
   out.depth = s.t;
   double sum = 0;
   for (std::uint32_t v = 0; v < n; ++v)
@@ -301,6 +345,7 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
       sum += (search.full()[v] - s.t[v]) / search.full()[v];
     }
   out.moved_back_mean = out.moved_back ? sum / static_cast<double>(out.moved_back) : 0.0;
+  out.checks_run = search.checks_run_ + 2;  // plus the floor and the final full check
   out.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return out;

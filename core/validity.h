@@ -43,7 +43,8 @@ struct ValidShell {
   std::vector<double> depth;      ///< per surface vertex: final arc length t_v, world units
   AssembleResult shell;           ///< the assembled shell
   ShellCheckResult checks;        ///< checks of the final shell (valid() unless floor fails)
-  int rounds = 0;
+  int rounds = 0;                 ///< rounds of the moving-back search
+  int checks_run = 0;             ///< shell checks run in all (the cost of this stage)
   std::size_t moved_back = 0;     ///< vertices whose final t_v is below their traced depth
   double moved_back_mean = 0;     ///< mean (traced - final) / traced over moved-back vertices
   std::size_t unwelded = 0;       ///< vertices that left their weld

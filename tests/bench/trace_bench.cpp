@@ -1,0 +1,133 @@
+// trace_bench.cpp — path tracing and merge resolution (core/trace.h) on OpenVDB fields: traces
+// per second and total trace time with 1 and 2 threads, beside the field build time of the same
+// run.
+//
+// Not part of the test run. Usage:
+//   vdb_shell_bench_traces [--no-large] [MESH[@RESOLUTION] ...]
+// Without MESH: the Table 1 shapes (assets/shapes.h, detail 1) at 128^3, then at 512^3
+// ../shared/meshes/fandisk.obj and make_shape("box", 46) (101,568 faces); --no-large skips the
+// two 512^3 runs. Each mesh's fields are built once (all threads); each thread count then traces
+// it once with the default options (RK2, hash-grid point index). "trace" is the integration,
+// "merge" the merge resolution; traces/s = traces / (trace + merge). The 2-thread result is
+// checked byte for byte against the 1-thread one. Prints Markdown.
+#include <tbb/global_control.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <exception>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "assets/shapes.h"
+#include "core/trace.h"
+#include "core/validate.h"
+#include "vdb_ops/fields.h"
+
+namespace vdb_shell {
+namespace {
+
+struct Job {
+  std::string label;
+  SurfaceMesh mesh;
+  int resolution = 128;
+};
+
+template <class T>
+bool same_bytes(const std::vector<T>& a, const std::vector<T>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
+}
+
+bool identical(const TraceResult& a, const TraceResult& b) {
+  return same_bytes(a.offsets, b.offsets) && same_bytes(a.samples, b.samples) &&
+         same_bytes(a.end, b.end) && same_bytes(a.stop, b.stop) &&
+         same_bytes(a.merged_with, b.merged_with);
+}
+
+TraceResult trace_with_threads(const Job& job, const Fields& fields, int threads) {
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
+                            static_cast<std::size_t>(threads));
+  return trace_paths(job.mesh, fields, TraceOptions{});
+}
+
+void run(const Job& job) {
+  FieldOptions options;
+  options.resolution = job.resolution;
+  options.max_memory_gb = 16.0;
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::unique_ptr<Fields> fields = build_fields(job.mesh, options);
+  const double field_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  const TraceResult one = trace_with_threads(job, *fields, 1);
+  const TraceResult two = trace_with_threads(job, *fields, 2);
+  const double total1 = one.seconds_tracing + one.seconds_merging;
+  for (const TraceResult* r : {&one, &two}) {
+    const int threads = r == &one ? 1 : 2;
+    const double total = r->seconds_tracing + r->seconds_merging;
+    char speed_up[32];
+    std::snprintf(speed_up, sizeof speed_up, "%.2f", total > 0 ? total1 / total : 0.0);
+    std::printf("| %s | %zu | %d | %.2f | %d | %.3f | %.3f | %.3f | %.0f | %s | %zu/%zu/%zu/%zu "
+                "| %.1f | %s |\n",
+                job.label.c_str(), job.mesh.triangles.size(), job.resolution, field_seconds,
+                threads, r->seconds_tracing, r->seconds_merging, total,
+                total > 0 ? static_cast<double>(r->num_traces()) / total : 0.0,
+                speed_up,
+                r->count[0], r->count[1], r->count[2], r->count[3],
+                static_cast<double>(r->samples.size()) / static_cast<double>(r->num_traces()),
+                threads == 1 ? "" : (identical(one, two) ? "yes" : "NO"));
+    std::fflush(stdout);
+  }
+}
+
+}  // namespace
+}  // namespace vdb_shell
+
+int main(int argc, char** argv) {
+  using namespace vdb_shell;
+  try {
+    bool large = true;
+    std::vector<Job> jobs;
+    for (int a = 1; a < argc; ++a) {
+      std::string arg = argv[a];
+      if (arg == "--no-large") {
+        large = false;
+        continue;
+      }
+      int res = 128;
+      const auto at = arg.rfind('@');
+      if (at != std::string::npos) {
+        res = std::atoi(arg.c_str() + at + 1);
+        arg = arg.substr(0, at);
+      }
+      SurfaceMesh mesh = std::filesystem::exists(arg) ? load_surface(arg).mesh : make_shape(arg);
+      jobs.push_back({std::filesystem::path(arg).filename().string(), std::move(mesh), res});
+    }
+    if (jobs.empty()) {
+      for (const char* name : {"box", "cylinder", "pointy", "horn", "tube", "sphere", "funnel",
+                               "propeller", "star", "bowl", "torus"})
+        jobs.push_back({name, make_shape(name), 128});
+      if (large) {
+        const std::string fandisk = std::string(VDB_SHELL_SHARED_MESHES) + "/fandisk.obj";
+        if (std::filesystem::exists(fandisk))
+          jobs.push_back({"fandisk", load_surface(fandisk).mesh, 512});
+        else
+          std::fprintf(stderr, "skipping fandisk: %s not found\n", fandisk.c_str());
+        jobs.push_back({"box (detail 46)", make_shape("box", 46), 512});
+      }
+    }
+    std::printf("| mesh | faces | resolution | fields, s (all threads) | threads | trace, s "
+                "| merge, s | total, s | traces/s | speed-up | stops crit/merge/flux/cap "
+                "| samples/trace | same as 1 thread |\n"
+                "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    for (const Job& job : jobs) run(job);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "vdb_shell_bench_traces: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,185 @@
+// validity_test.cpp — the validity guarantee of the shell (issue 6): every generated shape at
+// two resolutions, adversarial shapes (thin plate, sharp concave notch, long needle, two close
+// components), identical output for 1 and 2 threads, and the independent checker's verdict.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "assets/shapes.h"
+#include "core/writers.h"
+#include "tests/test_support.h"
+
+namespace vdb_shell {
+namespace {
+
+using test::run_command;
+using test::TempDir;
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+SurfaceMesh transformed(SurfaceMesh m, const Vec3d& scale, const Vec3d& offset = {}) {
+  for (Vec3d& p : m.points) p = Vec3d(p.x * scale.x, p.y * scale.y, p.z * scale.z) + offset;
+  return m;
+}
+
+SurfaceMesh merged(const SurfaceMesh& a, const SurfaceMesh& b) {
+  SurfaceMesh m = a;
+  const auto base = static_cast<std::uint32_t>(a.points.size());
+  m.points.insert(m.points.end(), b.points.begin(), b.points.end());
+  for (Triangle t : b.triangles) m.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+  return m;
+}
+
+/// Prism over a polygon (counter-clockwise in xy, star-shaped around `centre`), height h,
+/// side walls cut into `layers` rows.
+SurfaceMesh extrude(const std::vector<Vec3d>& poly, const Vec3d& centre, double h, int layers) {
+  SurfaceMesh m;
+  const auto n = static_cast<std::uint32_t>(poly.size());
+  for (int l = 0; l <= layers; ++l)
+    for (const Vec3d& p : poly) m.points.push_back({p.x, p.y, h * l / layers});
+  const std::uint32_t bottom = static_cast<std::uint32_t>(m.points.size());
+  m.points.push_back({centre.x, centre.y, 0});
+  m.points.push_back({centre.x, centre.y, h});
+  const std::uint32_t top_ring = n * static_cast<std::uint32_t>(layers);
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const std::uint32_t j = (i + 1) % n;
+    m.triangles.push_back({bottom, j, i});
+    m.triangles.push_back({bottom + 1, top_ring + i, top_ring + j});
+    for (std::uint32_t l = 0; l < static_cast<std::uint32_t>(layers); ++l) {
+      const std::uint32_t a = l * n + i, b = l * n + j, c = (l + 1) * n + j, d = (l + 1) * n + i;
+      m.triangles.push_back({a, b, c});
+      m.triangles.push_back({a, c, d});
+    }
+  }
+  return m;
+}
+
+struct ShellRun {
+  int exit_code = -1;
+  std::string err;
+  nlohmann::json report;
+};
+
+ShellRun shell_of(const TempDir& dir, const SurfaceMesh& mesh, const std::string& name,
+                  const std::string& args) {
+  const std::string in = dir.file(name + ".obj");
+  write_surface(in, mesh);
+  const auto r = run_command(test::vdb_shell_bin() + " '" + in + "' -o '" +
+                             dir.file(name + ".vtu") + "' -q " + args);
+  ShellRun out{r.exit_code, r.err, {}};
+  if (r.exit_code == 0) out.report = nlohmann::json::parse(r.out);
+  return out;
+}
+
+void expect_valid(const ShellRun& r, const std::string& what) {
+  ASSERT_EQ(r.exit_code, 0) << what << ": " << r.err;
+  const auto& s = r.report["shell"];
+  EXPECT_TRUE(s["valid"].get<bool>()) << what << " " << s.dump();
+  EXPECT_EQ(s["inverted_tets"], 0) << what;
+  EXPECT_EQ(s["zero_volume_tets"], 0) << what;
+  EXPECT_EQ(s["intersecting_tet_pairs"], 0) << what;
+  EXPECT_EQ(s["outside_inner_vertices"], 0) << what;
+  EXPECT_EQ(s["missing_surface_triangles"], 0) << what;
+  EXPECT_LE(s["tets"].get<long>(), 3 * r.report["input"]["faces"].get<long>()) << what;
+  EXPECT_GT(s["coverage"].get<double>(), 0.2) << what;  // valid, and not a paper-thin skin
+}
+
+TEST(Validity, EveryShapeAtTwoResolutions) {
+  TempDir dir;
+  for (const ShapeInfo& shape : shape_catalog())
+    for (int res : {48, 96})
+      expect_valid(shell_of(dir, make_shape(shape.name, 1), shape.name,
+                            "--resolution " + std::to_string(res)),
+                   shape.name + " at " + std::to_string(res));
+}
+
+TEST(Validity, ThinPlate) {
+  // 2 voxels thick: the two sides meet at the medial surface.
+  TempDir dir;
+  const SurfaceMesh plate = transformed(make_shape("box", 4), {1.0, 1.0, 0.03});
+  const ShellRun r = shell_of(dir, plate, "plate", "--resolution 64");
+  expect_valid(r, "thin plate");
+  EXPECT_GT(r.report["shell"]["coverage"].get<double>(), 0.5);
+}
+
+TEST(Validity, SharpConcaveNotch) {
+  const std::vector<Vec3d> poly = {{0, 0, 0},      {1, 0, 0},   {1, 1, 0}, {0.55, 1, 0},
+                                   {0.5, 0.3, 0},  {0.45, 1, 0}, {0, 1, 0}};
+  TempDir dir;
+  expect_valid(shell_of(dir, extrude(poly, {0.5, 0.15, 0}, 0.4, 4), "notch", "--resolution 64"),
+               "notch");
+}
+
+TEST(Validity, LongNeedle) {
+  TempDir dir;
+  const SurfaceMesh needle = transformed(make_shape("cylinder", 2), {0.04, 0.04, 1.0});
+  expect_valid(shell_of(dir, needle, "needle", "--resolution 96"), "needle");
+}
+
+TEST(Validity, TwoCloseComponents) {
+  // Two boxes one voxel apart (resolution 64 over a 1.016-long box: voxel ~0.016).
+  TempDir dir;
+  const SurfaceMesh a = transformed(make_shape("box", 2), {0.5, 0.5, 0.5}, {-0.254, 0, 0});
+  const SurfaceMesh b = transformed(make_shape("box", 2), {0.5, 0.5, 0.5}, {0.254, 0, 0});
+  const ShellRun r = shell_of(dir, merged(a, b), "pair", "--resolution 64");
+  expect_valid(r, "two close boxes");
+  EXPECT_EQ(r.report["input"]["components"], 2);
+}
+
+TEST(Validity, FineMeshStaysThick) {
+  // Edges (1/24) shorter than the point size (sqrt(3)/32): neighbours start side by side.
+  TempDir dir;
+  const ShellRun r = shell_of(dir, make_shape("box", 12), "finebox", "--resolution 32");
+  expect_valid(r, "fine box");
+  EXPECT_GT(r.report["shell"]["coverage"].get<double>(), 0.8);
+}
+
+TEST(Validity, SharedMeshesValidAndSameForOneAndTwoThreads) {
+  const auto meshes = test::shared_meshes_dir();
+  if (meshes.empty()) GTEST_SKIP() << "../shared/meshes is absent";
+  TempDir dir;
+  for (const char* name : {"decimated-knight.off", "spot.obj", "fandisk.obj", "fertility.off"}) {
+    const std::string in = (meshes / name).string();
+    std::string bytes[2];
+    for (int threads : {1, 2}) {
+      const std::string out = dir.file("s" + std::to_string(threads) + ".vtu");
+      const auto r = run_command(test::vdb_shell_bin() + " '" + in + "' -o '" + out +
+                                 "' -q --resolution 64 -j " + std::to_string(threads));
+      ASSERT_EQ(r.exit_code, 0) << name << ": " << r.err;
+      expect_valid({r.exit_code, r.err, nlohmann::json::parse(r.out)}, name);
+      bytes[threads - 1] = slurp(out);
+    }
+    EXPECT_FALSE(bytes[0].empty());
+    EXPECT_TRUE(bytes[0] == bytes[1]) << name << ": output differs between 1 and 2 threads";
+  }
+}
+
+TEST(Validity, IndependentCheckerAgrees) {
+  const auto checker = test::shared_checker();
+  if (checker.empty()) GTEST_SKIP() << "../shared/eval is absent";
+  if (run_command("/usr/bin/python3 -c 'import meshio, scipy'").exit_code != 0)
+    GTEST_SKIP() << "python3-meshio/scipy missing";
+  TempDir dir;
+  for (const char* name : {"horn", "star", "bowl"}) {
+    const ShellRun r = shell_of(dir, make_shape(name, 1), name, "--resolution 64");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const auto c = run_command("/usr/bin/python3 '" + checker.string() + "' '" +
+                               dir.file(std::string(name) + ".obj") + "' '" +
+                               dir.file(std::string(name) + ".vtu") + "' --samples 20000");
+    EXPECT_EQ(c.exit_code, 0) << name << ":\n" << c.out << c.err;
+  }
+}
+
+}  // namespace
+}  // namespace vdb_shell
