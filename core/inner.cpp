@@ -58,18 +58,22 @@ InnerVertices place_inner_vertices(const SurfaceMesh& mesh, const TraceResult& t
 
   const double tol = options.weld_tolerance < 0.0 ? 0.5 * traces.parameters.point_size
                                                   : options.weld_tolerance;
+  std::vector<char> weldable(n);
+  for (std::size_t v = 0; v < n; ++v)
+    weldable[v] = out.arc[v] > 0.0 && out.arc[v] >= traces.end_arc(v);
   std::vector<std::uint32_t> rep(n);
   for (std::uint32_t v = 0; v < n; ++v) rep[v] = v;
   if (tol > 0.0 && n > 0) {
     const std::unique_ptr<PointIndex> index = make_index(ends, tol);
     std::vector<std::uint32_t> near;
     for (std::uint32_t v = 0; v < n; ++v) {
-      // Only points that moved off the surface weld: the surface itself stays as it is.
-      if (out.arc[v] <= 0.0) continue;
+      // Only trace ends weld: not the surface itself, and not points a thickness limit placed
+      // mid-trace (welding could carry them past their limit).
+      if (!weldable[v]) continue;
       index->find_within(ends[v], tol, near);
       for (std::uint32_t u : near) {
         if (u >= v) break;
-        if (rep[u] == u && out.arc[u] > 0.0) {
+        if (rep[u] == u && weldable[u]) {
           rep[v] = u;
           ++out.welded;
           break;

@@ -4,7 +4,8 @@
 // Each surface vertex v gets the point of its own trace at arc length
 //     min(end arc, max_thickness, edge_factor * mean length of v's incident edges)
 // (the limits that are set), interpolated between samples — thickness is measured along the
-// trace. End points that meet are then welded: in vertex order, each point joins the first
+// trace. Trace ends (not points a limit placed mid-trace: welding could carry them past the
+// limit) that meet are then welded: in vertex order, each point joins the first
 // earlier representative within the weld tolerance, or becomes a representative itself (no
 // chains: a welded group never spans more than the tolerance from its representative). The
 // representative keeps its own position, so every inner vertex lies on a trace.

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "assets/shapes.h"
+#include "core/surface_mesh.h"
 #include "core/writers.h"
 #include "tests/test_support.h"
 
@@ -128,6 +129,60 @@ TEST(Pipeline, ThicknessLimitHolds) {
   EXPECT_GT(vertices, 300);
 }
 
+/// Vertices and triangles of an OBJ file (v and f lines, 1-based plain indices).
+SurfaceMesh read_obj(const std::string& path) {
+  SurfaceMesh m;
+  std::ifstream in(path);
+  std::string line;
+  while (std::getline(in, line)) {
+    std::istringstream s(line);
+    std::string tag;
+    s >> tag;
+    if (tag == "v") {
+      Vec3d p;
+      s >> p.x >> p.y >> p.z;
+      m.points.push_back(p);
+    } else if (tag == "f") {
+      Triangle t;
+      s >> t[0] >> t[1] >> t[2];
+      m.triangles.push_back({t[0] - 1, t[1] - 1, t[2] - 1});
+    }
+  }
+  return m;
+}
+
+TEST(Pipeline, EdgeFactorThicknessLimitHolds) {
+  // Paper Fig. 12: thickness at most K times the mean length of the vertex's incident edges.
+  TempDir dir;
+  const std::string in = shape_file(dir, "horn");
+  const double k = 0.5;
+  run_shell(in, dir.file("h.vtu"),
+            "-q --thickness-edge-factor 0.5 --inner '" + dir.file("inner.obj") + "'");
+  const SurfaceMesh outer = read_obj(in), inner = read_obj(dir.file("inner.obj"));
+  ASSERT_EQ(outer.triangles.size(), inner.triangles.size());
+  std::vector<double> sum(outer.points.size(), 0.0);
+  std::vector<int> count(outer.points.size(), 0);
+  for (const Triangle& t : outer.triangles)
+    for (int c = 0; c < 3; ++c) {
+      const double l = distance(outer.points[t[c]], outer.points[t[(c + 1) % 3]]);
+      sum[t[c]] += l, sum[t[(c + 1) % 3]] += l;
+      ++count[t[c]], ++count[t[(c + 1) % 3]];
+    }
+  int checked = 0;
+  for (std::size_t f = 0; f < outer.triangles.size(); ++f) {
+    const Triangle& o = outer.triangles[f];
+    const Triangle& i = inner.triangles[f];  // the inner copy is written reversed: (a, c, b)
+    const std::uint32_t corner_to_inner[3] = {i[0], i[2], i[1]};
+    for (int c = 0; c < 3; ++c) {
+      const double limit = k * sum[o[c]] / count[o[c]];
+      // The straight distance never exceeds the arc length the limit applies to.
+      EXPECT_LE(distance(outer.points[o[c]], inner.points[corner_to_inner[c]]), limit + 1e-9);
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 3 * 408);
+}
+
 TEST(Pipeline, BadOptionsExit2AndWriteNothing) {
   TempDir dir;
   const std::string in = shape_file(dir, "box");
@@ -157,7 +212,8 @@ TEST(Pipeline, SharedMeshesRunEndToEnd) {
     EXPECT_LE(j["shell"]["tets"].get<long>(), 3 * j["input"]["faces"].get<long>()) << name;
     EXPECT_EQ(j["stop_reasons"]["cap"], 0) << name;
     EXPECT_EQ(j["shell"]["missing_surface_triangles"], 0) << name;
-    EXPECT_GT(j["shell"]["coverage"].get<double>(), 0.3) << name;
+    EXPECT_GT(j["shell"]["coverage"].get<double>(), 0.5) << name;
+    EXPECT_TRUE(j["shell"]["valid"].get<bool>()) << name;
   }
 }
 
