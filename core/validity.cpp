@@ -288,8 +288,8 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
   }
 
   // Refinement: move moved-back vertices one level deeper where that stays valid.
-  if (options.refine && out.checks.valid()) {
-    for (int pass = 0; pass < 2; ++pass) {
+  if (out.checks.valid()) {
+    for (int pass = 0; pass < options.refine_passes; ++pass) {
       State trial = s;
       std::vector<std::uint32_t> raised;
       for (std::uint32_t v = 0; v < n; ++v)

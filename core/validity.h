@@ -17,8 +17,8 @@
 // the floor is an element of that valid configuration, which is impossible. So an offending
 // element always has a vertex above its floor, and the loop ends with no offending element.
 // Vertices that were never involved keep their full depth: the shell stays as thick as the
-// traces allow wherever it is already valid. A final pass tries to move each moved-back vertex
-// deeper again (halfway towards its previous depth), keeping every move that stays valid.
+// traces allow wherever it is already valid. Refinement passes then try to move each moved-back
+// vertex deeper again (by 1/sqrt(shrink)), keeping every move that stays valid.
 #pragma once
 
 #include <cstddef>
@@ -35,7 +35,7 @@ struct ValidityOptions {
   double shrink = 0.7;          ///< factor applied to t_v of a moved-back vertex, in (0, 1)
   double floor_fraction = 0.02; ///< t_min_v = this * shortest incident edge (capped at full)
   int max_rounds = 400;         ///< safety net; the floor is then applied to every offender
-  bool refine = true;           ///< try to move moved-back vertices deeper again
+  int refine_passes = 4;        ///< passes moving moved-back vertices deeper again (0: none)
 };
 
 struct ValidShell {
