@@ -124,6 +124,29 @@ TEST(FieldsSphere, DistanceWithinHalfVoxelEverywhereInside) {
   EXPECT_EQ(fields.stats().interior_voxels, negative);
 }
 
+TEST(FieldsSphere, WavefrontInteriorMatchesMeshToVolumeInterior) {
+  // Both methods store distances to a closest triangle of the same mesh; OpenVDB's own interior
+  // expansion plus refinement is the reference for the wavefront fill.
+  const Fields& fields = sphere_fields();
+  FieldOptions options;
+  options.sdf_method = SdfMethod::kMeshToVolumeInterior;
+  const auto reference = build_fields(sphere_mesh(), options);
+  const double h = fields.voxel_size();
+  double worst = 0.0, sum = 0.0;
+  std::size_t n = 0;
+  for_each_voxel(fields, [&](int i, int j, int k) {
+    const double phi = fields.phi_at_voxel(i, j, k);
+    if (!(phi < 0.0)) return;
+    const double e = std::abs(phi - reference->phi_at_voxel(i, j, k)) / h;
+    worst = std::max(worst, e);
+    sum += e;
+    ++n;
+  });
+  EXPECT_GT(n, 1000000u);
+  EXPECT_LT(worst, 0.25) << "voxels";
+  EXPECT_LT(sum / double(n), 0.01) << "voxels (mean)";
+}
+
 TEST(FieldsSphere, MeshVerticesOnZeroLevel) {
   const Fields& fields = sphere_fields();
   auto probe = fields.probe();

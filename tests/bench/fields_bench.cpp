@@ -2,8 +2,11 @@
 // plain narrow-band meshToLevelSet (half-width 3) of the same mesh at the same voxel size.
 //
 // Not part of the test run. Usage:
-//   vdb_shell_bench_fields [--max-resolution N] [--skip-sweeping] [MESH ...]
+//   vdb_shell_bench_fields [--max-resolution N] [--repeat N] [--skip-sweeping] [--skip-queries]
+//                          [MESH ...]
 // Without MESH it uses ../shared/meshes/fandisk.obj and fertility.off subdivided to 144k faces.
+// With --repeat N every build runs N times (floor and fields alternating) and each row shows the
+// run with the median total time.
 // Every measurement runs in a forked child, so "peak" is that build's own maximum resident set
 // (VmHWM, after resetting it through /proc/self/clear_refs where the kernel allows) minus the
 // resident set at fork time. Where the reset is refused the column cannot go below the parent's
@@ -38,7 +41,7 @@ namespace {
 struct Sample {
   double seconds = 0.0;   ///< total build time
   double sdf = 0.0;       ///< SDF (incl. interior fill)
-  double refine = 0.0;    ///< refinement pass (part of sdf)
+  double refine = 0.0;    ///< interior fill or refinement pass (part of sdf)
   double flux = 0.0;      ///< flux grid
   double gradient = 0.0;  ///< gradient grid
   double active = 0.0;    ///< SDF active voxels
@@ -110,7 +113,7 @@ Sample from_stats(const FieldStats& st) {
   Sample s;
   s.seconds = st.seconds_total;
   s.sdf = st.seconds_sdf;
-  s.refine = st.seconds_refine;
+  s.refine = st.seconds_fill + st.seconds_refine;
   s.flux = st.seconds_flux;
   s.gradient = st.seconds_gradient;
   s.active = double(st.sdf_active_voxels);
@@ -143,6 +146,14 @@ SurfaceMesh subdivide(const SurfaceMesh& in) {
     out.triangles.push_back({ab, bc, ca});
   }
   return out;
+}
+
+/// The sample with the median total time (the lower middle one for an even count).
+Sample median_of(std::vector<Sample> v) {
+  std::sort(v.begin(), v.end(), [](const Sample& a, const Sample& b) {
+    return a.ok != b.ok ? a.ok : a.seconds < b.seconds;
+  });
+  return v.empty() ? Sample{} : v[(v.size() - 1) / 2];
 }
 
 void print_row(const std::string& mesh, int res, const std::string& what, const Sample& s,
@@ -233,14 +244,20 @@ void sphere_accuracy(SdfMethod method, int res) {
 int main(int argc, char** argv) {
   using namespace vdb_shell;
   int max_res = 1024;
+  int repeat = 1;
   bool sweeping = true;
+  bool queries = true;
   std::vector<std::string> paths;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--max-resolution" && i + 1 < argc) {
       max_res = std::atoi(argv[++i]);
+    } else if (a == "--repeat" && i + 1 < argc) {
+      repeat = std::max(1, std::atoi(argv[++i]));
     } else if (a == "--skip-sweeping") {
       sweeping = false;
+    } else if (a == "--skip-queries") {
+      queries = false;
     } else {
       paths.push_back(a);
     }
@@ -271,27 +288,48 @@ int main(int argc, char** argv) {
     return Sample{};
   });
   in_child([] {
+    sphere_accuracy(SdfMethod::kMeshToVolumeInterior, 128);
+    return Sample{};
+  });
+  in_child([] {
     sphere_accuracy(SdfMethod::kFastSweeping, 128);
     return Sample{};
   });
 
-  std::cout << "\n## Build time and peak memory\n\n"
-            << "peak = the build's own peak RSS (MB); ratio = time / floor time, peak / floor "
-               "peak.\n\n"
-            << "| mesh | res | build | total s | sdf s (refine) | flux s | grad s | sdf active "
-               "| flux active | grids MB | estimate MB | peak MB | ratio |\n"
-            << "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  std::cout
+      << "\n## Build time and peak memory\n\n"
+      << "peak = the build's own peak RSS (MB); ratio = time / floor time, peak / floor "
+         "peak.\n\n"
+      << "| mesh | res | build | total s | sdf s (fill or refine) | flux s | grad s | sdf active "
+         "| flux active | grids MB | estimate MB | peak MB | ratio |\n"
+      << "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& [name, mesh] : meshes) {
     const std::string label = name + " (" + std::to_string(mesh.num_faces()) + " f)";
     for (int res = 128; res <= max_res; res *= 2) {
       FieldOptions options;
       options.resolution = res;
-      const Sample floor = in_child([&] {
-        return from_stats(build_narrow_band_reference(mesh, options));
-      });
+      FieldOptions old_method = options;
+      old_method.sdf_method = SdfMethod::kMeshToVolumeInterior;
+      const bool with_old = res <= 512;
+      std::vector<Sample> floors, fields, olds;
+      for (int r = 0; r < repeat; ++r) {
+        floors.push_back(
+            in_child([&] { return from_stats(build_narrow_band_reference(mesh, options)); }));
+        fields.push_back(
+            in_child([&] { return from_stats(build_fields(mesh, options)->stats()); }));
+        if (with_old) {
+          olds.push_back(
+              in_child([&] { return from_stats(build_fields(mesh, old_method)->stats()); }));
+        }
+      }
+      const Sample floor = median_of(floors);
       print_row(label, res, "floor: meshToLevelSet hw 3", floor, floor.seconds, floor.peak_mb);
-      const Sample fields = in_child([&] { return from_stats(build_fields(mesh, options)->stats()); });
-      print_row(label, res, "fields (exact interior)", fields, floor.seconds, floor.peak_mb);
+      print_row(label, res, "fields (exact interior)", median_of(fields), floor.seconds,
+                floor.peak_mb);
+      if (with_old) {
+        print_row(label, res, "fields (meshToVolume interior)", median_of(olds), floor.seconds,
+                  floor.peak_mb);
+      }
       if (res <= 512) {
         FieldOptions g = options;
         g.store_gradient = true;
@@ -307,6 +345,7 @@ int main(int argc, char** argv) {
     }
   }
 
+  if (!queries) return 0;
   std::cout << "\n## Probe queries at 512 (one thread)\n\n"
             << "trace = gradient + flux per step along trace-like paths; random = gradient at "
                "random points of the bbox.\n\n"
