@@ -3,12 +3,10 @@
 //   vdb_shell_shapes NAME -o FILE.obj [--detail N]
 //   vdb_shell_shapes --list
 //
-// Coordinates are written with 17 significant digits (doubles round-trip exactly). The file is
-// written to FILE.tmp.<pid> beside the target and renamed onto it once complete, so a failure
-// never leaves a partial file. Exit codes: 0 success, 2 bad input (unknown shape, bad detail,
-// bad command line, output not writable; nothing is written), 3 internal error.
-#include <unistd.h>
-
+// Coordinates are written with 17 significant digits (doubles round-trip exactly), through a
+// temporary file renamed onto the target (core/writers.h), so a failure never leaves a partial
+// file. Exit codes: 0 success, 2 bad input (unknown shape, bad detail, bad command line, missing
+// output folder; nothing is written), 3 write failure or internal error.
 #include <cctype>
 #include <cstdio>
 #include <filesystem>
@@ -21,46 +19,12 @@
 
 #include "assets/shapes.h"
 #include "core/errors.h"
+#include "core/writers.h"
 
 namespace {
 
 namespace fs = std::filesystem;
 using vdb_shell::InputError;
-
-/// Writes `mesh` as OBJ to `path` through a temporary file and a rename.
-/// \throw InputError if the temporary file cannot be written or renamed onto `path`.
-void write_obj_atomically(const vdb_shell::SurfaceMesh& mesh, const std::string& name, int detail,
-                          const std::string& path) {
-  const std::string temp = path + ".tmp." + std::to_string(::getpid());
-  {
-    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
-    if (!out) {
-      throw InputError("cannot write '" + path + "': cannot create '" + temp +
-                       "' (does the folder exist and is it writable?)");
-    }
-    out << "# vdb_shell_shapes " << name << " --detail " << detail << ": " << mesh.num_vertices()
-        << " vertices, " << mesh.num_faces() << " triangles\n";
-    out << std::setprecision(17);
-    for (const vdb_shell::Vec3d& p : mesh.points) {
-      out << "v " << p.x << ' ' << p.y << ' ' << p.z << '\n';
-    }
-    for (const vdb_shell::Triangle& t : mesh.triangles) {
-      out << "f " << t[0] + 1 << ' ' << t[1] + 1 << ' ' << t[2] + 1 << '\n';
-    }
-    out.flush();
-    if (!out) {
-      out.close();
-      std::remove(temp.c_str());
-      throw InputError("cannot write '" + path + "': writing '" + temp + "' failed (disk full?)");
-    }
-  }
-  std::error_code ec;
-  fs::rename(temp, path, ec);
-  if (ec) {
-    std::remove(temp.c_str());
-    throw InputError("cannot write '" + path + "': " + ec.message());
-  }
-}
 
 void print_catalog() {
   std::cout << "shape        faces  description (detail N has about N^2 times the faces)\n";
@@ -113,7 +77,11 @@ int main(int argc, char** argv) {
       throw InputError("output '" + output + "' must end in .obj (only OBJ is written)");
     }
     const vdb_shell::SurfaceMesh mesh = vdb_shell::make_shape(name, detail);
-    write_obj_atomically(mesh, name, detail, output);
+    const fs::path folder = fs::path(output).parent_path();
+    if (!folder.empty() && !fs::is_directory(folder))
+      throw InputError("cannot write '" + output + "': the folder " + folder.string() +
+                       " does not exist; create it first");
+    vdb_shell::write_surface(output, mesh);  // full precision, temp file + rename
     std::cout << name << " (detail " << detail << "): " << mesh.num_vertices() << " vertices, "
               << mesh.num_faces() << " faces -> " << output << '\n';
     return 0;

@@ -28,7 +28,7 @@ double signed_volume(const SurfaceMesh& mesh) {
   return v / 6.0;
 }
 
-double mean_edge_length(const SurfaceMesh& mesh) {
+std::vector<std::pair<std::uint32_t, std::uint32_t>> unique_edges(const SurfaceMesh& mesh) {
   std::vector<std::pair<std::uint32_t, std::uint32_t>> edges;
   edges.reserve(mesh.triangles.size() * 3);
   for (const Triangle& t : mesh.triangles)
@@ -36,6 +36,11 @@ double mean_edge_length(const SurfaceMesh& mesh) {
       edges.emplace_back(std::min(t[k], t[(k + 1) % 3]), std::max(t[k], t[(k + 1) % 3]));
   std::sort(edges.begin(), edges.end());
   edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  return edges;
+}
+
+double mean_edge_length(const SurfaceMesh& mesh) {
+  const auto edges = unique_edges(mesh);
   if (edges.empty()) return 0.0;
   double sum = 0.0;
   for (const auto& e : edges) sum += distance(mesh.points[e.first], mesh.points[e.second]);

@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "core/vec3.h"
@@ -30,6 +31,8 @@ BBox bounding_box(const SurfaceMesh& mesh);
 Vec3d face_normal_area(const SurfaceMesh& mesh, std::size_t f);
 /// Signed enclosed volume (divergence theorem); positive for outward-oriented closed meshes.
 double signed_volume(const SurfaceMesh& mesh);
+/// The undirected edges (smaller index first), each once, sorted.
+std::vector<std::pair<std::uint32_t, std::uint32_t>> unique_edges(const SurfaceMesh& mesh);
 /// Mean length of the mesh's edges (each undirected edge counted once).
 double mean_edge_length(const SurfaceMesh& mesh);
 

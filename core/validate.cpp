@@ -271,13 +271,7 @@ SurfaceStats surface_stats(const SurfaceMesh& mesh) {
   }
   for (std::size_t v = 0; v < mesh.points.size(); ++v)
     if (used[v]) ++comp_v[sets.find(v)];
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> edges;
-  edges.reserve(mesh.triangles.size() * 3);
-  for (const Triangle& t : mesh.triangles)
-    for (int k = 0; k < 3; ++k)
-      edges.emplace_back(std::min(t[k], t[(k + 1) % 3]), std::max(t[k], t[(k + 1) % 3]));
-  std::sort(edges.begin(), edges.end());
-  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  const auto edges = unique_edges(mesh);
   s.edges = edges.size();
   for (const auto& e : edges) ++comp_e[sets.find(e.first)];
   long long genus2 = 0;

@@ -22,13 +22,6 @@ namespace fs = std::filesystem;
 using test::run_command;
 using test::TempDir;
 
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 /// Writes shape `name` to dir and returns its path.
 std::string shape_file(const TempDir& dir, const std::string& name) {
   const std::string path = dir.file(name + ".obj");
@@ -53,7 +46,7 @@ TEST(Pipeline, ReportHasEveryDocumentedKey) {
   const nlohmann::json j =
       run_shell(in, dir.file("horn.vtu"), "--resolution 64 -q --report '" + report + "'");
   ASSERT_FALSE(j.is_null());
-  EXPECT_EQ(nlohmann::json::parse(slurp(report)), j);
+  EXPECT_EQ(nlohmann::json::parse(test::read_text(report)), j);
   for (const char* key :
        {"/input/faces", "/input/vertices", "/shell/tets", "/shell/coverage",
         "/shell/inverted_tets", "/shell/intersecting_tet_pairs", "/quality/min",
@@ -99,10 +92,10 @@ TEST(Pipeline, SameBytesForOneAndTwoThreads) {
   const std::string in = shape_file(dir, "star");
   run_shell(in, dir.file("a.vtu"), "-q -j 1 --resolution 64 --paths '" + dir.file("a.vtk") + "'");
   run_shell(in, dir.file("b.vtu"), "-q -j 2 --resolution 64 --paths '" + dir.file("b.vtk") + "'");
-  const std::string a = slurp(dir.file("a.vtu"));
+  const std::string a = test::read_text(dir.file("a.vtu"));
   EXPECT_FALSE(a.empty());
-  EXPECT_EQ(a, slurp(dir.file("b.vtu")));
-  EXPECT_EQ(slurp(dir.file("a.vtk")), slurp(dir.file("b.vtk")));
+  EXPECT_EQ(a, test::read_text(dir.file("b.vtu")));
+  EXPECT_EQ(test::read_text(dir.file("a.vtk")), test::read_text(dir.file("b.vtk")));
 }
 
 TEST(Pipeline, ThicknessLimitHolds) {

@@ -36,7 +36,7 @@ fs::path shared_checker() {
   return fs::is_regular_file(file) ? fs::canonical(file) : fs::path();
 }
 
-static std::string slurp(const fs::path& p) {
+std::string read_text(const std::string& p) {
   std::ifstream in(p, std::ios::binary);
   std::ostringstream s;
   s << in.rdbuf();
@@ -50,8 +50,8 @@ CommandResult run_command(const std::string& command) {
   const int status = std::system(full.c_str());
   CommandResult r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = slurp(out);
-  r.err = slurp(err);
+  r.out = read_text(out);
+  r.err = read_text(err);
   return r;
 }
 

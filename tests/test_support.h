@@ -39,6 +39,9 @@ CommandResult run_command(const std::string& command);
 std::string vdb_shell_bin();
 std::string vdb_shell_shapes_bin();
 
+/// The bytes of `path` ("" when it cannot be read).
+std::string read_text(const std::string& path);
+
 /// Writes `text` to `path` (binary, exact bytes).
 void write_text(const std::string& path, const std::string& text);
 

@@ -21,13 +21,6 @@ namespace {
 using test::run_command;
 using test::TempDir;
 
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 SurfaceMesh transformed(SurfaceMesh m, const Vec3d& scale, const Vec3d& offset = {}) {
   for (Vec3d& p : m.points) p = Vec3d(p.x * scale.x, p.y * scale.y, p.z * scale.z) + offset;
   return m;
@@ -158,7 +151,7 @@ TEST(Validity, SharedMeshesValidAndSameForOneAndTwoThreads) {
                                  "' -q --resolution 64 -j " + std::to_string(threads));
       ASSERT_EQ(r.exit_code, 0) << name << ": " << r.err;
       expect_valid({r.exit_code, r.err, nlohmann::json::parse(r.out)}, name);
-      bytes[threads - 1] = slurp(out);
+      bytes[threads - 1] = test::read_text(out);
     }
     EXPECT_FALSE(bytes[0].empty());
     EXPECT_TRUE(bytes[0] == bytes[1]) << name << ": output differs between 1 and 2 threads";
