@@ -9,13 +9,18 @@
 
 #include <algorithm>
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <memory>
 #include <new>
 #include <string>
+#include <utility>
 #include <vector>
+
+#include <signal.h>
+#include <unistd.h>
 
 #include "core/assemble.h"
 #include "core/atomic_file.h"
@@ -40,8 +45,10 @@ namespace {
 
 /// What the user said on the command line (defaults are the documented ones).
 struct CliOptions {
-  std::string input;
+  std::vector<std::string> inputs;
+  std::string input;  ///< the input being processed (one of `inputs`)
   std::string output;
+  std::string format = "vtu";
   std::string level_set;
   std::string grid_name;
   std::string grids;
@@ -53,9 +60,19 @@ struct CliOptions {
   std::string integrator = "rk2";
   bool quiet = false;
   bool verbose = false;
+  bool progress = false;
+  bool err_is_terminal = false;  ///< stderr is a terminal: progress is on unless --quiet
+  // Which options were given explicitly (contradiction checks).
+  bool resolution_given = false;
+  bool format_given = false;
+  bool msh_version_given = false;
+  bool grid_given = false;
   FieldOptions fields;
   TraceOptions trace;
   ThicknessOptions thickness;
+
+  bool batch() const { return inputs.size() > 1; }
+  bool show_progress() const { return !quiet && (progress || err_is_terminal); }
 };
 
 using Clock = std::chrono::steady_clock;
@@ -69,7 +86,60 @@ std::string fmt(double v) {
   return buf;
 }
 
+std::string fmt_seconds(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.2f", v);
+  return buf;
+}
+
 std::string fmt(const Vec3d& v) { return "(" + fmt(v.x) + ", " + fmt(v.y) + ", " + fmt(v.z) + ")"; }
+
+/// Stage timer and progress printer: "[2/6] fields ... 0.42 s" on stderr, one line per stage.
+class Progress {
+ public:
+  Progress(std::ostream& err, bool show, int total, std::string prefix)
+      : err_(err), show_(show), total_(total), prefix_(std::move(prefix)) {}
+  ~Progress() {
+    if (open_ && show_) err_ << " failed\n" << std::flush;
+  }
+  Progress(const Progress&) = delete;
+  Progress& operator=(const Progress&) = delete;
+
+  void start(const char* name) {
+    name_ = name;
+    ++index_;
+    open_ = true;
+    t0_ = Clock::now();
+    if (show_)
+      err_ << prefix_ << "[" << index_ << "/" << total_ << "] " << name << " ..." << std::flush;
+  }
+  /// Ends the current stage; returns its seconds.
+  double stop() {
+    const double s = seconds_since(t0_);
+    open_ = false;
+    if (show_) err_ << " " << fmt_seconds(s) << " s\n" << std::flush;
+    timings_.emplace_back(name_, s);
+    return s;
+  }
+  /// "read 0.01 s, fields 0.42 s, ..."
+  std::string timings() const {
+    std::string s;
+    for (const auto& [name, t] : timings_)
+      s += (s.empty() ? "" : ", ") + name + " " + fmt_seconds(t) + " s";
+    return s;
+  }
+
+ private:
+  std::ostream& err_;
+  bool show_;
+  int total_;
+  std::string prefix_;
+  std::string name_;
+  int index_ = 0;
+  bool open_ = false;
+  Clock::time_point t0_;
+  std::vector<std::pair<std::string, double>> timings_;
+};
 
 void print_summary(std::ostream& out, const std::string& path, const LoadedSurface& s) {
   const SurfaceStats& st = s.stats;
@@ -84,6 +154,36 @@ void print_summary(std::ostream& out, const std::string& path, const LoadedSurfa
       << "bbox size   " << fmt(st.bbox.extent()) << "\n"
       << "mean edge   " << fmt(st.mean_edge_length) << "\n"
       << "volume      " << fmt(st.enclosed_volume) << "\n";
+}
+
+/// Rejects options that contradict each other, saying what to do instead.
+void check_contradictions(const CliOptions& o) {
+  namespace fs = std::filesystem;
+  if (o.quiet && o.progress)
+    throw InputError("--quiet and --progress contradict each other: choose one of them");
+  if (o.resolution_given && o.fields.voxel_size > 0)
+    throw InputError("--voxel-size and --resolution both set the voxel size: give only one of "
+                     "them");
+  if (o.grid_given && o.level_set.empty())
+    throw InputError("--grid " + o.grid_name + " names a grid of --level-set: give "
+                     "--level-set FILE.vdb too, or drop --grid");
+  if (o.batch()) {
+    if (o.msh_version_given && o.format != "msh")
+      throw InputError("--msh-version applies to .msh output only: add --format msh or drop "
+                       "--msh-version");
+    return;
+  }
+  if (o.format_given) {
+    if (o.output.empty())
+      throw InputError("--format applies to -o: give -o OUTPUT (its extension chooses the "
+                       "format with one input)");
+    if (fs::path(o.output).extension() != "." + o.format)
+      throw InputError("--format " + o.format + " contradicts -o " + o.output +
+                       ": with one input the extension of -o chooses the format; drop --format");
+  }
+  if (o.msh_version_given && fs::path(o.output).extension() != ".msh")
+    throw InputError("--msh-version applies to .msh output only: write -o FILE.msh or drop "
+                     "--msh-version");
 }
 
 /// Checks every output path before any work: known extension, existing folder.
@@ -120,51 +220,100 @@ void check_outputs(const CliOptions& o) {
     throw InputError("--paths, --inner and --report describe a shell: give -o OUTPUT too");
 }
 
-int run(CliOptions opt, std::ostream& out, std::ostream& err) {
-  const auto t_total = Clock::now();
-  check_outputs(opt);
-  opt.trace.integrator = parse_integrator(opt.integrator);
+/// With several inputs, -o (and --report) name folders: created if missing, but a path that
+/// exists as a file or ends in a file extension is rejected.
+void check_batch(const CliOptions& o) {
+  namespace fs = std::filesystem;
+  if (o.output.empty())
+    throw InputError("several inputs: give -o DIR, the folder that receives one shell per input "
+                     "(or run vdb_shell once per input to see each summary)");
+  if (!o.grids.empty() || !o.paths.empty() || !o.inner.empty() || !o.level_set.empty())
+    throw InputError("--grids, --paths, --inner and --level-set take a single input: run "
+                     "vdb_shell once per input for them");
+  tet_format_from_path("x." + o.format, o.msh_version);
+  auto check_dir = [](const std::string& dir, const char* option, const char* example) {
+    if (fs::exists(dir) && !fs::is_directory(dir))
+      throw InputError(std::string(option) + " " + dir + " is a file: with several inputs " +
+                       option + " names a folder (" + example + ")");
+    if (!fs::exists(dir) && fs::path(dir).has_extension())
+      throw InputError(std::string(option) + " " + dir + " looks like a file name: with several "
+                       "inputs " + option + " names a folder, created if missing (" + example +
+                       ")");
+  };
+  check_dir(o.output, "-o", "-o shells/");
+  if (!o.report.empty()) check_dir(o.report, "--report", "--report reports/");
+  std::vector<std::string> stems;
+  for (const std::string& in : o.inputs) stems.push_back(fs::path(in).stem().string());
+  std::sort(stems.begin(), stems.end());
+  const auto dup = std::adjacent_find(stems.begin(), stems.end());
+  if (dup != stems.end())
+    throw InputError("two inputs have the name " + *dup + ": their outputs would collide in " +
+                     o.output + "; rename one or run them in separate calls");
+}
 
-  auto t0 = Clock::now();
+/// What one run of the pipeline produced.
+struct RunOutcome {
+  bool shell = false;             ///< false: summary or --grids only, nothing below is set
+  nlohmann::ordered_json report;  ///< the JSON report
+  std::string summary;            ///< the one-line summary (without "vdb_shell: ")
+  std::size_t tets = 0;
+  double coverage = 0;
+  double seconds = 0;
+};
+
+/// Runs the whole pipeline on `opt.input` (options already checked). Prints the summary to `out`
+/// when there is no output; writes the outputs and the --report file otherwise.
+RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& err,
+                        const std::string& progress_prefix) {
+  const auto t_total = Clock::now();
+  const bool shell_wanted = !opt.output.empty();
+  const int stages = shell_wanted ? 6 : (opt.grids.empty() ? 1 : 3);
+  Progress progress(err, opt.show_progress(), stages, progress_prefix);
+  RunOutcome outcome;
+
+  progress.start("read");
   const LoadedSurface surface = load_surface(opt.input);
-  const double t_read = seconds_since(t0);
+  const double t_read = progress.stop();
   if (!opt.quiet)
     for (const std::string& n : surface.notices) err << "vdb_shell: note: " << n << "\n";
-  if (opt.output.empty() && opt.grids.empty()) {
+  if (!shell_wanted && opt.grids.empty()) {
     print_summary(out, opt.input, surface);
-    return kExitOk;
+    return outcome;
   }
   const SurfaceMesh& mesh = surface.mesh;
 
-  t0 = Clock::now();
+  progress.start("fields");
   const std::unique_ptr<Fields> fields =
       opt.level_set.empty() ? build_fields(mesh, opt.fields)
                             : fields_from_level_set(opt.level_set, opt.grid_name, mesh, opt.fields);
-  const double t_fields = seconds_since(t0);
+  const double t_fields = progress.stop();
   if (opt.verbose)
     err << "vdb_shell: fields: voxel " << fmt(fields->voxel_size()) << ", "
         << fields->stats().sdf_active_voxels << " SDF voxels, "
         << fields->stats().flux_active_voxels << " flux voxels, " << fmt(t_fields) << " s\n";
 
-  double t_write = 0;
-  if (opt.output.empty()) {  // --grids only
-    t0 = Clock::now();
+  if (!shell_wanted) {  // --grids only
+    progress.start("write");
     write_grids(opt.grids, *fields, fields->parameters());
+    progress.stop();
     if (!opt.quiet) err << "vdb_shell: wrote " << opt.grids << "\n";
-    return kExitOk;
+    if (opt.verbose) err << "vdb_shell: timings: " << progress.timings() << "\n";
+    return outcome;
   }
 
-  t0 = Clock::now();
+  progress.start("trace");
   const TraceResult traces = trace_paths(mesh, *fields, opt.trace, make_vdb_point_index);
-  const double t_trace = seconds_since(t0);
+  const double t_trace = progress.stop();
 
-  t0 = Clock::now();
+  progress.start("inner");
   const InnerVertices inner = place_inner_vertices(mesh, traces, opt.thickness);
+  const double t_inner = progress.stop();
+  progress.start("validity");
   const ValidShell valid = make_valid_shell(mesh, traces, inner);
   const AssembleResult& shell = valid.shell;
   const ShellCheckResult& checks = valid.checks;
   const QualitySummary quality = summarize_quality(mesh, shell.mesh);
-  const double t_assemble = seconds_since(t0);
+  const double t_assemble = t_inner + progress.stop();
   if (!checks.valid()) {
     std::string problems = describe_problems(checks);
     std::replace(problems.begin(), problems.end(), '\n', ';');
@@ -175,7 +324,7 @@ int run(CliOptions opt, std::ostream& out, std::ostream& err) {
                         "; nothing was written — please report this input");
   }
 
-  t0 = Clock::now();
+  progress.start("write");
   write_tet_mesh(opt.output, shell.mesh, tet_format_from_path(opt.output, opt.msh_version));
   if (!opt.grids.empty()) write_grids(opt.grids, *fields, fields->parameters());
   if (!opt.paths.empty()) write_paths_vtk(opt.paths, traces);
@@ -187,10 +336,10 @@ int run(CliOptions opt, std::ostream& out, std::ostream& err) {
           {valid.input.inner_id[t[0]], valid.input.inner_id[t[2]], valid.input.inner_id[t[1]]});
     write_surface(opt.inner, inner_surface);
   }
-  t_write = seconds_since(t0);
+  const double t_write = progress.stop();
   const double t_all = seconds_since(t_total);
 
-  nlohmann::ordered_json j;
+  nlohmann::ordered_json& j = outcome.report;
   j["input"] = {{"file", opt.input},
                 {"vertices", surface.stats.vertices},
                 {"faces", surface.stats.faces},
@@ -245,22 +394,89 @@ int run(CliOptions opt, std::ostream& out, std::ostream& err) {
                     {"write", t_write},   {"total", t_all}};
   if (!opt.report.empty())
     write_file_atomically(opt.report, [&](std::ostream& os) { os << j.dump(2) << "\n"; });
+  if (opt.verbose) err << "vdb_shell: timings: " << progress.timings() << "\n";
 
-  if (!opt.quiet) {
-    err << "vdb_shell: " << opt.output << ": " << shell.mesh.tets.size() << " tets from "
-        << mesh.triangles.size() << " faces, coverage " << fmt(quality.coverage)
-        << ", quality min " << fmt(quality.min_quality) << " median "
-        << fmt(quality.median_quality) << ", stops critical " << traces.count[0] << " merge "
-        << traces.count[1] << " flux " << traces.count[2] << " cap " << traces.count[3]
-        << ", " << fmt(t_all) << " s\n";
-  }
-  out << j.dump(2) << "\n";
+  outcome.shell = true;
+  outcome.tets = shell.mesh.tets.size();
+  outcome.coverage = quality.coverage;
+  outcome.seconds = t_all;
+  outcome.summary = opt.output + ": " + std::to_string(shell.mesh.tets.size()) + " tets from " +
+                    std::to_string(mesh.triangles.size()) + " faces, coverage " +
+                    fmt(quality.coverage) + ", quality min " + fmt(quality.min_quality) +
+                    " median " + fmt(quality.median_quality) + ", stops critical " +
+                    std::to_string(traces.count[0]) + " merge " +
+                    std::to_string(traces.count[1]) + " flux " +
+                    std::to_string(traces.count[2]) + " cap " +
+                    std::to_string(traces.count[3]) + ", " + fmt(t_all) + " s";
+  return outcome;
+}
+
+/// One input, -o a file: the JSON report on stdout, the summary line on stderr.
+int run_single(CliOptions opt, std::ostream& out, std::ostream& err) {
+  opt.input = opt.inputs.front();
+  check_outputs(opt);
+  const RunOutcome r = run_pipeline(opt, out, err, "");
+  if (!r.shell) return kExitOk;
+  if (!opt.quiet) err << "vdb_shell: " << r.summary << "\n";
+  out << r.report.dump(2) << "\n";
   return kExitOk;
 }
 
-}  // namespace
+/// Several inputs, -o a folder: one tab-separated report line per input on stdout,
+///   INPUT \t ok \t TETS \t COVERAGE \t SECONDS \t OUTPUT     or     INPUT \t error \t MESSAGE
+/// Every input is processed; the exit code is 0, or 2 if every failure was bad input, else 3.
+int run_batch(const CliOptions& opt, std::ostream& out, std::ostream& err) {
+  namespace fs = std::filesystem;
+  check_batch(opt);
+  try {
+    fs::create_directories(opt.output);
+    if (!opt.report.empty()) fs::create_directories(opt.report);
+  } catch (const fs::filesystem_error& e) {
+    throw ResourceError(std::string("cannot create the output folder: ") + e.what());
+  }
+  int failures = 0, bad_input = 0;
+  for (const std::string& input : opt.inputs) {
+    CliOptions one = opt;
+    one.input = input;
+    const std::string stem = fs::path(input).stem().string();
+    one.output = (fs::path(opt.output) / (stem + "." + opt.format)).string();
+    if (!opt.report.empty()) one.report = (fs::path(opt.report) / (stem + ".json")).string();
+    std::string error;
+    bool is_bad_input = false;
+    try {
+      const RunOutcome r = run_pipeline(one, out, err, "[" + stem + "] ");
+      out << input << "\tok\t" << r.tets << "\t" << fmt(r.coverage) << "\t"
+          << fmt_seconds(r.seconds) << "\t" << one.output << "\n"
+          << std::flush;
+      continue;
+    } catch (const InputError& e) {
+      error = e.what();
+      is_bad_input = true;
+    } catch (const std::bad_alloc&) {
+      error = "out of memory; lower --resolution or --max-memory";
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+    ++failures;
+    if (is_bad_input) ++bad_input;
+    std::replace(error.begin(), error.end(), '\n', ' ');
+    std::replace(error.begin(), error.end(), '\t', ' ');
+    err << "vdb_shell: error: " << (error.rfind(input, 0) == 0 ? "" : input + ": ") << error
+        << "\n";
+    out << input << "\terror\t" << error << "\n" << std::flush;
+  }
+  if (failures == 0) return kExitOk;
+  return failures == bad_input ? kExitBadInput : kExitFailure;
+}
 
-int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {
+int run(CliOptions opt, std::ostream& out, std::ostream& err) {
+  check_contradictions(opt);
+  opt.trace.integrator = parse_integrator(opt.integrator);
+  return opt.batch() ? run_batch(opt, out, err) : run_single(opt, out, err);
+}
+
+int run_cli_impl(int argc, const char* const* argv, std::ostream& out, std::ostream& err,
+                 bool err_is_terminal) {
   CLI::App app{"vdb_shell: turns a closed triangle surface (OBJ, OFF, PLY, STL) into a volumetric\n"
                "shell of tetrahedra by tracing every vertex inward through a signed distance\n"
                "field (\"Volumetric Shells using Path Tracing\"). Without -o it validates the\n"
@@ -270,8 +486,11 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   app.get_formatter()->column_width(40);
 
   CliOptions opt;
+  opt.err_is_terminal = err_is_terminal;
   const char* in = "Input";
-  app.add_option("INPUT", opt.input, "Surface mesh file (.obj .off .ply .stl)")
+  app.add_option("INPUT", opt.inputs,
+                 "Surface mesh file(s) (.obj .off .ply .stl); with several, -o names a folder")
+      ->default_str("")
       ->required()
       ->group(in);
   app.add_option("--level-set", opt.level_set,
@@ -336,13 +555,23 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   app.add_option("-o,--output", opt.output,
                  "Tet shell: .vtu .vtk .msh .mesh .ele (format from the extension)")
       ->group(og);
+  app.add_option("--format", opt.format,
+                 "Shell format with several inputs: vtu vtk msh mesh ele (one input: the "
+                 "extension of -o)")
+      ->check(CLI::IsMember({"vtu", "vtk", "msh", "mesh", "ele"}))
+      ->group(og);
   app.add_option("--msh-version", opt.msh_version, "Gmsh format: 41 (4.1) or 22 (2.2)")
       ->check(CLI::IsMember({41, 22}))
       ->group(og);
   app.add_option("--inner", opt.inner, "Write the inner surface (.obj .ply .off)")->group(og);
-  app.add_option("--report", opt.report, "Write the JSON report here too")->group(og);
+  app.add_option("--report", opt.report,
+                 "Write the JSON report here too (several inputs: a folder, one <stem>.json each)")
+      ->group(og);
   app.add_flag("-q,--quiet", opt.quiet, "Print only errors")->group(og);
-  app.add_flag("-v,--verbose", opt.verbose, "Print more detail")->group(og);
+  app.add_flag("-v,--verbose", opt.verbose, "Print more detail and per-stage timings")->group(og);
+  app.add_flag("--progress", opt.progress,
+               "Print each stage and its seconds on stderr (default: when stderr is a terminal)")
+      ->group(og);
 
   app.add_option("-j,--threads", opt.threads, "Worker threads (0: all cores)")
       ->check(CLI::NonNegativeNumber)
@@ -353,6 +582,10 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
     app.parse(argc, argv);
     if (opt.quiet && opt.verbose)
       throw CLI::ValidationError("--quiet and --verbose", "choose one of them");
+    opt.resolution_given = app.count("--resolution") > 0;
+    opt.format_given = app.count("--format") > 0;
+    opt.msh_version_given = app.count("--msh-version") > 0;
+    opt.grid_given = app.count("--grid") > 0;
   } catch (const CLI::ParseError& e) {
     const int code = app.exit(e, out, err);
     return code == 0 ? kExitOk : kExitBadInput;
@@ -376,6 +609,33 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   }
 }
 
-int run_cli(int argc, const char* const* argv) { return run_cli(argc, argv, std::cout, std::cerr); }
+extern "C" void remove_temp_files_and_reraise(int sig) {
+  remove_pending_temp_files();
+  std::signal(sig, SIG_DFL);
+  std::raise(sig);
+}
+
+}  // namespace
+
+int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {
+  return run_cli_impl(argc, argv, out, err, false);
+}
+
+int run_cli(int argc, const char* const* argv) {
+  return run_cli_impl(argc, argv, std::cout, std::cerr, isatty(STDERR_FILENO) == 1);
+}
+
+void install_signal_cleanup() {
+  struct sigaction action {};
+  action.sa_handler = remove_temp_files_and_reraise;
+  sigemptyset(&action.sa_mask);
+  action.sa_flags = SA_RESETHAND;
+  for (const int sig : {SIGINT, SIGTERM}) {
+    struct sigaction previous {};
+    // A signal the parent made us ignore (nohup, `cmd &` in a script for SIGINT) stays ignored.
+    if (sigaction(sig, nullptr, &previous) == 0 && previous.sa_handler == SIG_IGN) continue;
+    sigaction(sig, &action, nullptr);
+  }
+}
 
 }  // namespace vdb_shell

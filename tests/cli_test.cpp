@@ -1,4 +1,5 @@
-// cli_test.cpp — the vdb_shell command end to end: summary, help, version, exit codes.
+// cli_test.cpp — the vdb_shell command end to end: summary, help, version, exit codes, batch,
+// contradictory options, progress, and interruption by a signal.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -7,7 +8,15 @@
 #include <string>
 #include <vector>
 
+#include <csignal>
+#include <fstream>
+#include <iterator>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include "cli/cli.h"
+#include "core/atomic_file.h"
 #include "tests/test_support.h"
 
 namespace vdb_shell {
@@ -83,6 +92,182 @@ TEST(Cli, InwardInputIsFlippedWithANotice) {
   EXPECT_EQ(r.code, 0);
   EXPECT_NE(r.err.find("flipped"), std::string::npos) << r.err;
   EXPECT_NE(r.out.find("volume      1.33333"), std::string::npos) << r.out;
+}
+
+const char* kOpenObj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+
+std::vector<std::string> lines_of(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  return lines;
+}
+
+/// Names of every file below `dir` (recursive).
+std::vector<std::string> files_below(const std::filesystem::path& dir) {
+  std::vector<std::string> names;
+  if (!std::filesystem::exists(dir)) return names;
+  for (const auto& e : std::filesystem::recursive_directory_iterator(dir))
+    if (e.is_regular_file()) names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+TEST(CliBatch, OneGoodOneBadInputExit2AndOneLineEach) {
+  TempDir dir;
+  test::write_text(dir.file("tet.obj"), kTetObj);
+  test::write_text(dir.file("open.obj"), kOpenObj);
+  const std::string out_dir = dir.file("shells");  // created because it is missing
+  const InProcess r = cli({dir.file("tet.obj"), dir.file("open.obj"), "-o", out_dir, "-r", "32",
+                           "--report", dir.file("reports")});
+  EXPECT_EQ(r.code, 2) << r.err;
+  const auto lines = lines_of(r.out);
+  ASSERT_EQ(lines.size(), 2u) << r.out;
+  EXPECT_EQ(lines[0].rfind(dir.file("tet.obj") + "\tok\t4\t", 0), 0u) << lines[0];
+  EXPECT_EQ(lines[1].rfind(dir.file("open.obj") + "\terror\t", 0), 0u) << lines[1];
+  EXPECT_NE(lines[1].find("boundary edges"), std::string::npos) << lines[1];
+  EXPECT_EQ(files_below(out_dir), std::vector<std::string>{"tet.vtu"});
+  EXPECT_EQ(files_below(dir.file("reports")), std::vector<std::string>{"tet.json"});
+}
+
+TEST(CliBatch, AllGoodExit0AndFormatChoosesExtension) {
+  TempDir dir;
+  test::write_text(dir.file("a.obj"), kTetObj);
+  test::write_text(dir.file("b.obj"), kTetObj);
+  const InProcess r =
+      cli({dir.file("a.obj"), dir.file("b.obj"), "-o", dir.file("out"), "--format", "msh", "-r",
+           "32", "-q"});
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(lines_of(r.out).size(), 2u) << r.out;
+  EXPECT_EQ(files_below(dir.file("out")), (std::vector<std::string>{"a.msh", "b.msh"}));
+}
+
+TEST(CliBatch, Exit2IfEveryFailureIsBadInputElse3) {
+  TempDir dir;
+  test::write_text(dir.file("open.obj"), kOpenObj);
+  test::write_text(dir.file("tet.obj"), kTetObj);
+  InProcess r = cli({dir.file("open.obj"), dir.file("missing.obj"), "-o", dir.file("o")});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(lines_of(r.out).size(), 2u) << r.out;
+  EXPECT_TRUE(files_below(dir.file("o")).empty());
+  // A resource failure (memory budget) on the good input and bad input on the other: exit 3.
+  r = cli({dir.file("tet.obj"), dir.file("open.obj"), "-o", dir.file("o"), "--max-memory",
+           "0.000001"});
+  EXPECT_EQ(r.code, 3) << r.err;
+  const auto lines = lines_of(r.out);
+  ASSERT_EQ(lines.size(), 2u) << r.out;
+  EXPECT_NE(lines[0].find("\terror\t"), std::string::npos) << lines[0];
+  EXPECT_NE(lines[0].find("--max-memory"), std::string::npos) << lines[0];
+  EXPECT_TRUE(files_below(dir.file("o")).empty());
+}
+
+TEST(CliBatch, OutputMustBeAFolder) {
+  TempDir dir;
+  test::write_text(dir.file("a.obj"), kTetObj);
+  test::write_text(dir.file("b.obj"), kTetObj);
+  InProcess r = cli({dir.file("a.obj"), dir.file("b.obj"), "-o", dir.file("shell.vtu")});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("names a folder"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("shell.vtu")));
+  test::write_text(dir.file("existing"), "x");
+  r = cli({dir.file("a.obj"), dir.file("b.obj"), "-o", dir.file("existing")});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("is a file"), std::string::npos) << r.err;
+  r = cli({dir.file("a.obj"), dir.file("b.obj")});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("-o DIR"), std::string::npos) << r.err;
+  std::filesystem::create_directory(dir.file("sub"));
+  test::write_text(dir.file("sub/a.off"), "");
+  r = cli({dir.file("a.obj"), dir.file("sub/a.off"), "-o", dir.file("out")});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("collide"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("out")));
+}
+
+TEST(CliOptions, ContradictionsAreRejectedWithWhatToDo) {
+  TempDir dir;
+  test::write_text(dir.file("tet.obj"), kTetObj);
+  const std::string in = dir.file("tet.obj"), vtu = dir.file("tet.vtu");
+  struct Case {
+    std::vector<std::string> args;
+    std::string message;
+  };
+  const std::vector<Case> cases = {
+      {{in, "-o", vtu, "--voxel-size", "0.1", "--resolution", "64"}, "give only one"},
+      {{in, "-o", vtu, "--grid", "surface"}, "--level-set FILE.vdb"},
+      {{in, "-o", vtu, "--msh-version", "22"}, "FILE.msh"},
+      {{in, in, "-o", dir.file("d"), "--msh-version", "22"}, "--format msh"},
+      {{in, "-o", vtu, "--format", "vtk"}, "drop --format"},
+      {{in, "--report", dir.file("r.json")}, "give -o OUTPUT"},
+      {{in, "--inner", dir.file("i.obj")}, "give -o OUTPUT"},
+      {{in, "--paths", dir.file("p.vtk")}, "give -o OUTPUT"},
+      {{in, "-o", vtu, "--quiet", "--progress"}, "choose one"},
+      {{in, dir.file("tet2.obj"), "-o", dir.file("d"), "--paths", dir.file("p.vtk")},
+       "single input"},
+  };
+  for (const Case& c : cases) {
+    const InProcess r = cli(c.args);
+    EXPECT_EQ(r.code, 2) << c.message;
+    EXPECT_NE(r.err.find(c.message), std::string::npos) << r.err;
+    EXPECT_TRUE(r.out.empty()) << r.out;
+  }
+  EXPECT_FALSE(std::filesystem::exists(vtu));
+  EXPECT_FALSE(std::filesystem::exists(dir.file("d")));
+  // Not contradictions: an explicit --voxel-size 0 with --resolution, a matching --format.
+  EXPECT_EQ(cli({in, "-o", vtu, "--voxel-size", "0", "-r", "32", "-q"}).code, 0);
+  EXPECT_EQ(cli({in, "-o", vtu, "--format", "vtu", "-r", "32", "-q"}).code, 0);
+  EXPECT_EQ(cli({in, "-o", dir.file("t.msh"), "--msh-version", "22", "-r", "32", "-q"}).code, 0);
+}
+
+TEST(CliProgress, StagesAndTimingsOnStderr) {
+  TempDir dir;
+  test::write_text(dir.file("tet.obj"), kTetObj);
+  InProcess r = cli({dir.file("tet.obj"), "-o", dir.file("t.vtu"), "-r", "32", "--progress",
+                     "-v"});
+  EXPECT_EQ(r.code, 0) << r.err;
+  for (const char* stage : {"[1/6] read ...", "[2/6] fields ...", "[3/6] trace ...",
+                            "[4/6] inner ...", "[5/6] validity ...", "[6/6] write ..."})
+    EXPECT_NE(r.err.find(stage), std::string::npos) << stage << "\n" << r.err;
+  EXPECT_NE(r.err.find("timings: read "), std::string::npos) << r.err;
+  EXPECT_EQ(r.out.front(), '{');  // stdout still holds only the JSON report
+  r = cli({dir.file("tet.obj"), "-o", dir.file("t.vtu"), "-r", "32"});
+  EXPECT_EQ(r.err.find("[1/6]"), std::string::npos) << r.err;  // not a terminal: no progress
+}
+
+TEST(CliSignal, SigtermLeavesNoOutputAndNoTempFile) {
+  TempDir dir;
+  const auto shape = run_command(test::vdb_shell_shapes_bin() + " sphere --detail 8 -o '" +
+                                 dir.file("x.obj") + "'");
+  ASSERT_EQ(shape.exit_code, 0) << shape.err;
+  std::filesystem::create_directory(dir.file("out"));
+  const auto r = run_command("'" + test::vdb_shell_bin() + "' '" + dir.file("x.obj") + "' -o '" +
+                             dir.file("out/x.vtu") + "' --report '" + dir.file("out/x.json") +
+                             "' --resolution 256 & p=$!; sleep 0.8; kill -TERM $p; wait $p; "
+                             "echo status=$?");
+  EXPECT_NE(r.out.find("status=143"), std::string::npos) << r.out << r.err;
+  EXPECT_TRUE(files_below(dir.file("out")).empty());
+}
+
+TEST(CliSignal, HandlerRemovesTheTempFileOfAWriteInFlight) {
+  TempDir dir;
+  const std::string target = dir.file("shell.vtu");
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {  // the child: a write in flight when SIGTERM arrives
+    install_signal_cleanup();
+    AtomicFile file(target);
+    file.stream() << "partial";
+    file.stream().flush();
+    std::raise(SIGTERM);
+    _exit(0);  // not reached: the handler re-raises with the default action
+  }
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  EXPECT_TRUE(WIFSIGNALED(status));
+  if (WIFSIGNALED(status)) {
+    EXPECT_EQ(WTERMSIG(status), SIGTERM);
+  }
+  EXPECT_TRUE(files_below(dir.path()).empty());
 }
 
 }  // namespace
