@@ -67,6 +67,8 @@ struct CliOptions {
   bool format_given = false;
   bool msh_version_given = false;
   bool grid_given = false;
+  bool adaptivity_given = false;
+  double adaptivity = 0.0;  ///< meshing a .vdb INPUT: 0 voxel-sized quads .. 1 fewest polygons
   FieldOptions fields;
   TraceOptions trace;
   ThicknessOptions thickness;
@@ -157,6 +159,12 @@ void print_summary(std::ostream& out, const std::string& path, const LoadedSurfa
 }
 
 /// Rejects options that contradict each other, saying what to do instead.
+bool is_vdb(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext == ".vdb";
+}
+
 void check_contradictions(const CliOptions& o) {
   namespace fs = std::filesystem;
   if (o.quiet && o.progress)
@@ -164,9 +172,14 @@ void check_contradictions(const CliOptions& o) {
   if (o.resolution_given && o.fields.voxel_size > 0)
     throw InputError("--voxel-size and --resolution both set the voxel size: give only one of "
                      "them");
-  if (o.grid_given && o.level_set.empty())
-    throw InputError("--grid " + o.grid_name + " names a grid of --level-set: give "
-                     "--level-set FILE.vdb too, or drop --grid");
+  const bool vdb_inputs = std::all_of(o.inputs.begin(), o.inputs.end(), is_vdb);
+  if (o.grid_given && o.level_set.empty() && !vdb_inputs)
+    throw InputError("--grid " + o.grid_name + " names a grid of --level-set or of a .vdb "
+                     "INPUT: give --level-set FILE.vdb too, or drop --grid");
+  if (!o.level_set.empty() && std::any_of(o.inputs.begin(), o.inputs.end(), is_vdb))
+    throw InputError("a .vdb INPUT is its own level set: drop --level-set");
+  if (o.adaptivity_given && !std::any_of(o.inputs.begin(), o.inputs.end(), is_vdb))
+    throw InputError("--adaptivity applies to meshing a .vdb INPUT: drop it for mesh files");
   if (o.batch()) {
     if (o.msh_version_given && o.format != "msh")
       throw InputError("--msh-version applies to .msh output only: add --format msh or drop "
@@ -272,7 +285,12 @@ RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& 
   RunOutcome outcome;
 
   progress.start("read");
-  const LoadedSurface surface = load_surface(opt.input);
+  // A .vdb input is a level set: its zero crossing is the surface, and it is also the field.
+  const bool vdb_input = is_vdb(opt.input);
+  const LoadedSurface surface =
+      vdb_input ? make_surface(level_set_to_soup(opt.input, opt.grid_name, opt.adaptivity),
+                               opt.input)
+                : load_surface(opt.input);
   const double t_read = progress.stop();
   if (!opt.quiet)
     for (const std::string& n : surface.notices) err << "vdb_shell: note: " << n << "\n";
@@ -283,9 +301,10 @@ RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& 
   const SurfaceMesh& mesh = surface.mesh;
 
   progress.start("fields");
+  const std::string level_set = vdb_input ? opt.input : opt.level_set;
   const std::unique_ptr<Fields> fields =
-      opt.level_set.empty() ? build_fields(mesh, opt.fields)
-                            : fields_from_level_set(opt.level_set, opt.grid_name, mesh, opt.fields);
+      level_set.empty() ? build_fields(mesh, opt.fields)
+                        : fields_from_level_set(level_set, opt.grid_name, mesh, opt.fields);
   const double t_fields = progress.stop();
   if (opt.verbose)
     err << "vdb_shell: fields: voxel " << fmt(fields->voxel_size()) << ", "
@@ -315,13 +334,15 @@ RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& 
   const QualitySummary quality = summarize_quality(mesh, shell.mesh);
   const double t_assemble = t_inner + progress.stop();
   if (!checks.valid()) {
-    std::string problems = describe_problems(checks);
-    std::replace(problems.begin(), problems.end(), '\n', ';');
-    throw InternalError(opt.input + ": could not make the shell valid after " +
-                        std::to_string(valid.rounds) + " rounds (" + problems + ")" +
-                        (valid.floor_valid ? "" : "; the thinnest shell is invalid too: " +
-                                                      valid.floor_problems) +
-                        "; nothing was written — please report this input");
+    std::string message = opt.input + ": could not make the shell valid after " +
+                          std::to_string(valid.rounds) + " rounds (" + describe_problems(checks) +
+                          ")" +
+                          (valid.floor_valid ? "" : "; the thinnest shell is invalid too: " +
+                                                        valid.floor_problems) +
+                          "; nothing was written — please report this input";
+    while (!message.empty() && message.back() == '\n') message.pop_back();
+    std::replace(message.begin(), message.end(), '\n', ';');
+    throw InternalError(message);
   }
 
   progress.start("write");
@@ -489,15 +510,21 @@ int run_cli_impl(int argc, const char* const* argv, std::ostream& out, std::ostr
   opt.err_is_terminal = err_is_terminal;
   const char* in = "Input";
   app.add_option("INPUT", opt.inputs,
-                 "Surface mesh file(s) (.obj .off .ply .stl); with several, -o names a folder")
+                 "Surface mesh file(s) (.obj .off .ply .stl), or a level set (.vdb) meshed at "
+                 "its zero crossing; with several, -o names a folder")
       ->default_str("")
       ->required()
       ->group(in);
   app.add_option("--level-set", opt.level_set,
                  "Use this .vdb level set as the distance field instead of building one")
       ->group(in);
-  app.add_option("--grid", opt.grid_name, "Grid of --level-set to use (default: 'surface' or "
-                                          "the first level set)")
+  app.add_option("--grid", opt.grid_name, "Grid of --level-set or of a .vdb INPUT to use "
+                                          "(default: 'surface', else the first level set)")
+      ->group(in);
+  app.add_option("--adaptivity", opt.adaptivity,
+                 "Meshing a .vdb INPUT: 0 keeps voxel-sized quads, up to 1 merges flat regions "
+                 "into fewer faces")
+      ->check(CLI::Range(0.0, 1.0))
       ->group(in);
 
   const char* fg = "Fields";
@@ -586,6 +613,7 @@ int run_cli_impl(int argc, const char* const* argv, std::ostream& out, std::ostr
     opt.format_given = app.count("--format") > 0;
     opt.msh_version_given = app.count("--msh-version") > 0;
     opt.grid_given = app.count("--grid") > 0;
+    opt.adaptivity_given = app.count("--adaptivity") > 0;
   } catch (const CLI::ParseError& e) {
     const int code = app.exit(e, out, err);
     return code == 0 ? kExitOk : kExitBadInput;

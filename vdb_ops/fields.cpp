@@ -14,6 +14,7 @@
 #include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/MeshToVolume.h>
 #include <openvdb/tools/Prune.h>
+#include <openvdb/tools/VolumeToMesh.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <unistd.h>
@@ -1505,16 +1506,11 @@ std::vector<VdbGridInfo> grid_infos(const Fields& fields) {
   return out;
 }
 
-std::unique_ptr<Fields> fields_from_level_set(const std::string& vdb_path,
-                                              const std::string& grid_name,
-                                              const SurfaceMesh& mesh,
-                                              const FieldOptions& options) {
-  init_openvdb();
-  require_readable(vdb_path);
-  if (!(options.flux_min >= 0.0 && options.flux_min <= 1.0)) {
-    throw InputError("flux_min must lie in [0, 1]; got " + format_double(options.flux_min));
-  }
-  const auto t0 = std::chrono::steady_clock::now();
+/// Reads the float level set `grid_name` of `vdb_path` (empty name: 'surface', else the first
+/// float level set) and checks its type and class. `where` names it for messages.
+/// \throw InputError naming the file, the grid and the fix.
+FloatGrid::Ptr read_level_set_grid(const std::string& vdb_path, const std::string& grid_name,
+                                   std::string& where) {
   openvdb::GridBase::Ptr base;
   std::string chosen;
   try {
@@ -1552,7 +1548,7 @@ std::unique_ptr<Fields> fields_from_level_set(const std::string& vdb_path,
     throw InputError("cannot read '" + vdb_path + "' as a .vdb file: " + e.what());
   }
   FloatGrid::Ptr grid = openvdb::gridPtrCast<FloatGrid>(base);
-  const std::string where = "grid '" + chosen + "' of '" + vdb_path + "'";
+  where = "grid '" + chosen + "' of '" + vdb_path + "'";
   if (!grid) {
     throw InputError(where + " holds " + base->valueType() +
                      " values; a level set must be a float grid");
@@ -1563,6 +1559,21 @@ std::unique_ptr<Fields> fields_from_level_set(const std::string& vdb_path,
                      "'); if it holds signed distances (negative inside), try setting the grid "
                      "class to level set");
   }
+  return grid;
+}
+
+std::unique_ptr<Fields> fields_from_level_set(const std::string& vdb_path,
+                                              const std::string& grid_name,
+                                              const SurfaceMesh& mesh,
+                                              const FieldOptions& options) {
+  init_openvdb();
+  require_readable(vdb_path);
+  if (!(options.flux_min >= 0.0 && options.flux_min <= 1.0)) {
+    throw InputError("flux_min must lie in [0, 1]; got " + format_double(options.flux_min));
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  std::string where;
+  FloatGrid::Ptr grid = read_level_set_grid(vdb_path, grid_name, where);
   if (!grid->transform().isLinear()) {
     throw InputError(where + " has a non-linear (frustum) transform; resample it to a linear one");
   }
@@ -1612,7 +1623,7 @@ std::unique_ptr<Fields> fields_from_level_set(const std::string& vdb_path,
                         " GiB; raise --max-memory");
   }
   FieldStats stats;
-  stats.source = vdb_path + ":" + chosen;
+  stats.source = vdb_path + ":" + grid->getName();
   stats.estimated_bytes = std::size_t(bytes);
   try {
     grid->tree().voxelizeActiveTiles();
@@ -1643,6 +1654,30 @@ std::unique_ptr<Fields> fields_from_level_set(const std::string& vdb_path,
   } catch (const std::bad_alloc&) {
     throw ResourceError("out of memory while preparing the fields of " + where);
   }
+}
+
+
+PolygonSoup level_set_to_soup(const std::string& vdb_path, const std::string& grid_name,
+                              double adaptivity) {
+  init_openvdb();
+  require_readable(vdb_path);
+  if (!(adaptivity >= 0.0 && adaptivity <= 1.0))
+    throw InputError("--adaptivity must lie in [0, 1]; got " + format_double(adaptivity));
+  std::string where;
+  const FloatGrid::Ptr grid = read_level_set_grid(vdb_path, grid_name, where);
+  std::vector<openvdb::Vec3s> points;
+  std::vector<openvdb::Vec3I> triangles;
+  std::vector<openvdb::Vec4I> quads;
+  openvdb::tools::volumeToMesh(*grid, points, triangles, quads, 0.0, adaptivity);
+  PolygonSoup soup;
+  soup.points.reserve(points.size());
+  for (const openvdb::Vec3s& p : points) soup.points.push_back({p[0], p[1], p[2]});
+  // OpenVDB's polygons face into the negative (inside) region: reverse them to face outward.
+  for (const openvdb::Vec3I& t : triangles) soup.polygons.push_back({t[2], t[1], t[0]});
+  for (const openvdb::Vec4I& q : quads) soup.polygons.push_back({q[3], q[2], q[1], q[0]});
+  if (soup.polygons.empty())
+    throw InputError(where + " has no zero crossing: its level set holds no surface to mesh");
+  return soup;
 }
 
 }  // namespace vdb_shell

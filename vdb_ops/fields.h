@@ -42,6 +42,7 @@
 #include <vector>
 
 #include "core/field.h"
+#include "core/mesh_io.h"
 #include "core/surface_mesh.h"
 #include "core/vec3.h"
 
@@ -212,6 +213,14 @@ struct VdbGridInfo {
 
 /// Reads every grid of `path` with the OpenVDB API.
 /// \throw InputError if the file is missing or not a .vdb file.
+/// The zero crossing of the level set `grid_name` of `vdb_path` (empty: 'surface', else the
+/// first float level set) as polygons (OpenVDB volumeToMesh; quads and triangles, outward),
+/// world units. `adaptivity` in [0, 1]: 0 keeps every voxel-sized quad, larger values merge
+/// flat regions into fewer polygons. Pass the result through make_surface() (validate.h).
+/// \throw InputError for a missing file, a grid that is not a float level set, or no surface.
+PolygonSoup level_set_to_soup(const std::string& vdb_path, const std::string& grid_name,
+                              double adaptivity);
+
 std::vector<VdbGridInfo> read_vdb_grid_infos(const std::string& path);
 
 /// The same description of the in-memory grids of `fields` (as write_grids() would name them,
