@@ -302,9 +302,14 @@ RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& 
 
   progress.start("fields");
   const std::string level_set = vdb_input ? opt.input : opt.level_set;
+  // The flux grid stores |flux| >= flux_min only: keep it at most rho / 2 (fields.h) so a
+  // smaller --flux-threshold still sees every value it asks about.
+  FieldOptions field_options = opt.fields;
+  field_options.flux_min =
+      std::clamp(0.5 * opt.trace.flux_threshold, 1e-3, field_options.flux_min);
   const std::unique_ptr<Fields> fields =
-      level_set.empty() ? build_fields(mesh, opt.fields)
-                        : fields_from_level_set(level_set, opt.grid_name, mesh, opt.fields);
+      level_set.empty() ? build_fields(mesh, field_options)
+                        : fields_from_level_set(level_set, opt.grid_name, mesh, field_options);
   const double t_fields = progress.stop();
   if (opt.verbose)
     err << "vdb_shell: fields: voxel " << fmt(fields->voxel_size()) << ", "

@@ -50,7 +50,7 @@ class ShellSearch {
  public:
   ShellSearch(const SurfaceMesh& surface, const TraceResult& traces, const InnerVertices& start,
               const ValidityOptions& options)
-      : surface_(surface), traces_(traces), start_(start), options_(options) {
+      : surface_(surface), traces_(traces), start_(start) {
     const std::size_t n = surface.points.size();
     full_.resize(n);
     floor_.assign(n, std::numeric_limits<double>::infinity());
@@ -153,7 +153,6 @@ class ShellSearch {
   const SurfaceMesh& surface_;
   const TraceResult& traces_;
   const InnerVertices& start_;
-  const ValidityOptions& options_;
   std::vector<double> full_, floor_;
   std::vector<Vec3d> fallback_, correction_;
   std::vector<std::uint32_t> group_size_;
@@ -184,7 +183,7 @@ std::vector<std::uint8_t> changed_tets(const TetMesh& mesh, const std::vector<Ve
 }
 
 /// Offending tets and inner slots of a check.
-void collect_offenders(const SurfaceMesh& surface, const ShellInput& in, const TetMesh& mesh,
+void collect_offenders(const SurfaceMesh& surface, const ShellInput& in,
                        const ShellCheckResult& c, std::vector<std::uint32_t>& tets,
                        std::vector<std::uint32_t>& slots) {
   const std::uint32_t n = static_cast<std::uint32_t>(surface.points.size());
@@ -205,7 +204,6 @@ void collect_offenders(const SurfaceMesh& surface, const ShellInput& in, const T
       for (std::uint32_t v : surface.triangles[f]) slots.push_back(in.inner_id[v]);
   std::sort(tets.begin(), tets.end());
   tets.erase(std::unique(tets.begin(), tets.end()), tets.end());
-  (void)mesh;
 }
 
 }  // namespace
@@ -247,7 +245,7 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
     }
     previous = current;
     if (out.checks.valid() || out.rounds >= options.max_rounds) break;
-    collect_offenders(surface, out.input, out.shell.mesh, out.checks, bad_tets, bad_slots);
+    collect_offenders(surface, out.input, out.checks, bad_tets, bad_slots);
     std::fill(lowered.begin(), lowered.end(), 0);
     bool progress = false;
     auto slot_depth = [&](std::uint32_t slot) {
@@ -313,7 +311,7 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
           out.checks = std::move(c);
           break;
         }
-        collect_offenders(surface, in, shell.mesh, c, bad_tets, bad_slots);
+        collect_offenders(surface, in, c, bad_tets, bad_slots);
         bool undone = false;
         auto undo = [&](std::uint32_t slot) {
           for (std::uint32_t v : members[slot])
