@@ -16,6 +16,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <map>
+#include <memory>
 #include <sstream>
 
 #include "core/errors.h"
@@ -348,24 +350,26 @@ struct OverlapSlot {
   std::uint32_t candidates = 0;
 };
 
-// A uniform grid in which every tet is entered in the cells it may intersect: the cells of its
-// bounding box that no face plane of the tet separates from it (conservative).
+// A uniform grid over `box` in which a tet is entered in the cells it may intersect: the cells of
+// its bounding box that no face plane of the tet separates from it (conservative). Geometry
+// outside `box` is clamped to the border cells, where the plane test may drop it: callers keep
+// their tets inside `box` (TetGrid::contains).
 class TetGrid {
  public:
-  TetGrid(const std::vector<TetGeometry>& geo, double cell_size) : geo_(geo) {
-    for (const TetGeometry& g : geo) {
-      box_.expand(g.box.lo);
-      box_.expand(g.box.hi);
-    }
+  TetGrid(const BBox& box, double cell_size) : box_(box) {
     cell_ = cell_size;
     inv_cell_ = 1.0 / cell_;
     for (int a = 0; a < 3; ++a)
       dims_[a] = std::max(1L, static_cast<long>(std::ceil((box_.hi[a] - box_.lo[a]) * inv_cell_)));
   }
 
-  // Cells of tet t, written to `out` (when not null) in increasing order; returns how many.
-  std::size_t cells_of(std::size_t t, std::uint32_t* out) const {
-    const TetGeometry& g = geo_[t];
+  bool contains(const BBox& b) const {
+    return b.lo.x >= box_.lo.x && b.lo.y >= box_.lo.y && b.lo.z >= box_.lo.z &&
+           b.hi.x <= box_.hi.x && b.hi.y <= box_.hi.y && b.hi.z <= box_.hi.z;
+  }
+
+  // Cells of tet g, written to `out` (when not null) in increasing order; returns how many.
+  std::size_t cells_of(const TetGeometry& g, std::uint32_t* out) const {
     return cells_in(g.box, out, [&](const Vec3d& centre, double reach_scale) {
       for (int f = 0; f < 4; ++f) {
         const Vec3d& n = g.n[f];
@@ -423,22 +427,28 @@ class TetGrid {
                       dims_[a] - 1);
   }
 
-  const std::vector<TetGeometry>& geo_;
   BBox box_;
   double cell_ = 1.0, inv_cell_ = 1.0;
   long dims_[3] = {1, 1, 1};
 };
 
-// Cell size: about the edge of a cube of the mean tet volume, so that slivers enter few cells,
-// made larger until the grid has at most 32 cells per tet and the tets' boxes span at most 64
-// cells each on average.
-double grid_cell_size(const std::vector<TetGeometry>& geo) {
-  const double n = static_cast<double>(geo.size());
+BBox bounding_box_of(const std::vector<TetGeometry>& geo) {
   BBox all;
-  double mean_volume = 0.0, mean_side = 0.0;
   for (const TetGeometry& g : geo) {
     all.expand(g.box.lo);
     all.expand(g.box.hi);
+  }
+  return all;
+}
+
+// Cell size: about the edge of a cube of the mean tet volume, so that slivers enter few cells,
+// made larger until `box` has at most `cells_per_tet` cells per tet and the tets' boxes span at
+// most 64 cells each on average.
+double grid_cell_size(const std::vector<TetGeometry>& geo, const BBox& all,
+                      double cells_per_tet) {
+  const double n = static_cast<double>(geo.size());
+  double mean_volume = 0.0, mean_side = 0.0;
+  for (const TetGeometry& g : geo) {
     mean_volume += std::abs(tet_volume(g.p[0], g.p[1], g.p[2], g.p[3])) / n;
     const Vec3d e = g.box.extent();
     mean_side += (e.x + e.y + e.z) / (3.0 * n);
@@ -455,10 +465,32 @@ double grid_cell_size(const std::vector<TetGeometry>& geo) {
       spanned += (std::floor(e.x / h) + 2.0) * (std::floor(e.y / h) + 2.0) *
                  (std::floor(e.z / h) + 2.0);
     }
-    if (cells <= 32.0 * n + 64.0 && spanned <= 64.0 * n) break;
+    if (cells <= cells_per_tet * n + 64.0 && spanned <= 64.0 * n) break;
     h *= 1.25;
   }
   return h;
+}
+
+// Whether tets a and b overlap, with the tolerance of `options` relative to their longest edge.
+bool tets_intersect(const TetGeometry& a, const TetGeometry& b, const ShellCheckOptions& options) {
+  if (!boxes_overlap(a.box, b.box)) return false;
+  return geometries_overlap(a, b, options.overlap_tolerance * std::max(a.max_edge, b.max_edge));
+}
+
+// Whether surface triangle f crosses the interior of tet g (touching does not count).
+bool surface_triangle_crosses(const SurfaceMesh& surface, std::size_t f, const TetGeometry& g,
+                              const ShellCheckOptions& options) {
+  const Triangle& tri = surface.triangles[f];
+  const std::array<Vec3d, 3> t = {surface.points[tri[0]], surface.points[tri[1]],
+                                  surface.points[tri[2]]};
+  BBox box;
+  for (const Vec3d& p : t) box.expand(p);
+  return boxes_overlap(box, g.box) &&
+         triangle_crosses_tet(t, g, options.overlap_tolerance * g.max_edge);
+}
+
+bool centroid_outside(const InsideTester& inside, const TetGeometry& g) {
+  return inside.outside((g.p[0] + g.p[1] + g.p[2] + g.p[3]) * 0.25);
 }
 
 // Tet-tet overlaps, and tets reaching outside the surface: crossed by a surface triangle, or
@@ -481,12 +513,14 @@ void check_tet_intersections(const SurfaceMesh& surface, const TetMesh& mesh,
       1024);
 
   // Broad phase: tet -> cells, then cell -> tets (tets in increasing order in every cell).
-  const TetGrid grid(geo, grid_cell_size(geo));
+  const BBox grid_box = bounding_box_of(geo);
+  const TetGrid grid(grid_box, grid_cell_size(geo, grid_box, 32.0));
   std::vector<std::uint64_t> tet_start(n + 1, 0);
-  for_each_index(n, [&](std::size_t t) { tet_start[t + 1] = grid.cells_of(t, nullptr); });
+  for_each_index(n, [&](std::size_t t) { tet_start[t + 1] = grid.cells_of(geo[t], nullptr); });
   for (std::size_t t = 0; t < n; ++t) tet_start[t + 1] += tet_start[t];
   std::vector<std::uint32_t> tet_cells(tet_start[n]);
-  for_each_index(n, [&](std::size_t t) { grid.cells_of(t, tet_cells.data() + tet_start[t]); });
+  for_each_index(n,
+                 [&](std::size_t t) { grid.cells_of(geo[t], tet_cells.data() + tet_start[t]); });
   std::vector<std::uint64_t> cell_start(grid.num_cells() + 1, 0);
   for (const std::uint32_t c : tet_cells) ++cell_start[c + 1];
   for (std::size_t c = 0; c < grid.num_cells(); ++c) cell_start[c + 1] += cell_start[c];
@@ -501,35 +535,25 @@ void check_tet_intersections(const SurfaceMesh& surface, const TetMesh& mesh,
   // Narrow phase: every tet against the later tets sharing one of its cells. Each chunk marks
   // the tets it has met (mark[u] == t + 1) so that a pair sharing several cells is tested once;
   // chunks of at least n / 32 tets keep the cost of the marks linear in n.
-  // With a focus, a focused tet meets every other tet (a pair of two focused tets once, from
-  // its smaller index) and an unfocused tet meets nothing.
-  const std::vector<std::uint8_t>* focus = options.focus;
-  auto focused = [&](std::size_t t) { return !focus || (*focus)[t] != 0; };
   std::vector<OverlapSlot> slots(options.check_overlaps ? n : 0);
   for_each_chunk(
       slots.size(),
       [&](std::size_t begin, std::size_t end) {
         std::vector<std::uint32_t> mark(n, 0);
         for (std::size_t t = begin; t != end; ++t) {
-          if (!focused(t)) continue;
-          const TetGeometry& a = geo[t];
           OverlapSlot& slot = slots[t];
           const auto stamp = static_cast<std::uint32_t>(t + 1);
           for (std::uint64_t k = tet_start[t]; k < tet_start[t + 1]; ++k) {
             const std::uint32_t c = tet_cells[k];
             const std::uint32_t* first = cell_tets.data() + cell_start[c];
             const std::uint32_t* last = cell_tets.data() + cell_start[c + 1];
-            for (const std::uint32_t* it = focus ? first : std::upper_bound(first, last, t);
-                 it != last; ++it) {
+            for (const std::uint32_t* it = std::upper_bound(first, last, t); it != last; ++it) {
               const std::uint32_t u = *it;
-              if (u == t || (u < t && focused(u))) continue;
               if (mark[u] == stamp) continue;
               mark[u] = stamp;
-              const TetGeometry& b = geo[u];
-              if (!boxes_overlap(a.box, b.box)) continue;
+              if (!boxes_overlap(geo[t].box, geo[u].box)) continue;
               ++slot.candidates;
-              const double tol = options.overlap_tolerance * std::max(a.max_edge, b.max_edge);
-              if (geometries_overlap(a, b, tol)) slot.partners.push_back(u);
+              if (tets_intersect(geo[t], geo[u], options)) slot.partners.push_back(u);
             }
           }
           std::sort(slot.partners.begin(), slot.partners.end());
@@ -549,19 +573,6 @@ void check_tet_intersections(const SurfaceMesh& surface, const TetMesh& mesh,
 
   // Leaks: every surface triangle against the tets sharing one of its cells, then the centroids.
   const std::size_t n_faces = surface.triangles.size();
-  BBox grid_box;
-  for (const TetGeometry& g : geo) {
-    grid_box.expand(g.box.lo);
-    grid_box.expand(g.box.hi);
-  }
-  // With a focus, only cells holding a focused tet can hold a crossing worth reporting.
-  std::vector<std::uint8_t> focus_cell;
-  if (focus) {
-    focus_cell.assign(grid.num_cells(), 0);
-    for (std::size_t t = 0; t < n; ++t)
-      if (focused(t))
-        for (std::uint64_t k = tet_start[t]; k < tet_start[t + 1]; ++k) focus_cell[tet_cells[k]] = 1;
-  }
   std::vector<std::vector<std::uint32_t>> crossed(n_faces);
   for_each_chunk(
       n_faces,
@@ -579,26 +590,18 @@ void check_tet_intersections(const SurfaceMesh& surface, const TetMesh& mesh,
           grid.cells_of_triangle(t, cells.data());
           const auto stamp = static_cast<std::uint32_t>(f + 1);
           for (const std::uint32_t c : cells) {
-            if (focus && !focus_cell[c]) continue;
             for (std::uint64_t k = cell_start[c]; k < cell_start[c + 1]; ++k) {
               const std::uint32_t u = cell_tets[k];
               if (mark[u] == stamp) continue;
               mark[u] = stamp;
-              const TetGeometry& g = geo[u];
-              if (!focused(u) || !boxes_overlap(box, g.box)) continue;
-              if (triangle_crosses_tet(t, g, options.overlap_tolerance * g.max_edge))
-                crossed[f].push_back(u);
+              if (surface_triangle_crosses(surface, f, geo[u], options)) crossed[f].push_back(u);
             }
           }
         }
       },
       std::max<std::size_t>(1024, n_faces / 32));
   std::vector<std::uint8_t> leaking(n, 0);
-  for_each_index(n, [&](std::size_t t) {
-    if (!focused(t)) return;
-    const TetGeometry& g = geo[t];
-    leaking[t] = inside.outside((g.p[0] + g.p[1] + g.p[2] + g.p[3]) * 0.25) ? 1 : 0;
-  });
+  for_each_index(n, [&](std::size_t t) { leaking[t] = centroid_outside(inside, geo[t]) ? 1 : 0; });
   for (const std::vector<std::uint32_t>& list : crossed)
     for (const std::uint32_t t : list) leaking[t] = 1;
   for (std::size_t t = 0; t < n; ++t) {
@@ -617,8 +620,14 @@ struct FaceRecord {
   std::array<std::uint32_t, 3> key;  // sorted vertex indices
   std::uint32_t tet;
   std::uint8_t face;  // corner of the tet opposite the face
-  bool operator<(const FaceRecord& o) const {
-    return key != o.key ? key < o.key : (tet != o.tet ? tet < o.tet : face < o.face);
+  bool operator<(const FaceRecord& o) const {  // element by element: no memcmp calls
+    if (key[0] != o.key[0]) return key[0] < o.key[0];
+    if (key[1] != o.key[1]) return key[1] < o.key[1];
+    if (key[2] != o.key[2]) return key[2] < o.key[2];
+    return tet != o.tet ? tet < o.tet : face < o.face;
+  }
+  bool same_key(const FaceRecord& o) const {
+    return key[0] == o.key[0] && key[1] == o.key[1] && key[2] == o.key[2];
   }
 };
 
@@ -649,7 +658,7 @@ void check_faces(const SurfaceMesh& surface, const TetMesh& mesh,
   std::sort(faces.begin(), faces.end());
   for (std::size_t i = 0; i < faces.size();) {
     std::size_t j = i + 1;
-    while (j < faces.size() && faces[j].key == faces[i].key) ++j;
+    while (j < faces.size() && faces[j].same_key(faces[i])) ++j;
     if (j - i > 2) ++result.nonmanifold_faces;
     i = j;
   }
@@ -660,7 +669,7 @@ void check_faces(const SurfaceMesh& surface, const TetMesh& mesh,
     FaceRecord probe{sorted3(tri[0], tri[1], tri[2]), 0, 0};
     const auto lo = std::lower_bound(faces.begin(), faces.end(), probe);
     auto hi = lo;
-    while (hi != faces.end() && hi->key == probe.key) ++hi;
+    while (hi != faces.end() && hi->same_key(probe)) ++hi;
     const std::ptrdiff_t count = hi - lo;
     if (count == 0) {
       ++result.missing_triangles;
@@ -685,40 +694,11 @@ std::string format_list(const std::vector<std::uint32_t>& list) {
   return s.str();
 }
 
-}  // namespace
-
-bool ShellCheckResult::valid() const {
-  return inverted_tets == 0 && zero_volume_tets == 0 && outside_inner_vertices == 0 &&
-         moved_surface_points == 0 && missing_triangles == 0 && shared_triangles == 0 &&
-         misoriented_triangles == 0 && nonmanifold_faces == 0 && overlapping_pairs == 0 &&
-         leaking_tets == 0 && !too_many_tets;
-}
-
-ShellCheckResult check_shell(const SurfaceMesh& surface, const TetMesh& mesh,
-                             const ShellCheckOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
-  const std::size_t n_points = mesh.points.size();
-  for (std::size_t t = 0; t < mesh.tets.size(); ++t)
-    for (const std::uint32_t v : mesh.tets[t])
-      if (v >= n_points)
-        throw InputError("check_shell: tet " + std::to_string(t) + " refers to point " +
-                         std::to_string(v) + ", but the tet mesh has " +
-                         std::to_string(n_points) + " points");
-  for (std::size_t v = 0; v < n_points; ++v)
-    if (!is_finite(mesh.points[v]))
-      throw InputError("check_shell: point " + std::to_string(v) +
-                       " of the tet mesh has a NaN or infinite coordinate");
-  if (!mesh.inner.empty() && mesh.inner.size() != n_points)
-    throw InputError("check_shell: " + std::to_string(mesh.inner.size()) + " inner flags for " +
-                     std::to_string(n_points) + " points; give one per point or none");
-
-  ShellCheckResult result;
-  result.tets = mesh.tets.size();
-  result.faces = surface.triangles.size();
-  result.too_many_tets = result.tets > 3 * result.faces;
+// Inverted and zero-volume tets into `result`.
+void count_volumes(const TetMesh& mesh, const ShellCheckOptions& options,
+                   ShellCheckResult& result) {
   const std::size_t max_listed = options.max_listed;
-
-  // Volumes: 0 positive, 1 inverted, 2 zero-volume.
+  // 0 positive, 1 inverted, 2 zero-volume.
   std::vector<std::uint8_t> sign(mesh.tets.size(), 0);
   for_each_chunk(
       mesh.tets.size(),
@@ -746,6 +726,34 @@ ShellCheckResult check_shell(const SurfaceMesh& surface, const TetMesh& mesh,
       list_item(result.first_zero_volume_tets, max_listed, t);
     }
   }
+}
+
+// The checks every call makes in full: mesh sanity (throws), T <= 3F, volumes, surface points
+// kept, boundary faces. Returns the indices of the inner points.
+std::vector<std::uint32_t> check_basics(const SurfaceMesh& surface, const TetMesh& mesh,
+                                        const ShellCheckOptions& options,
+                                        ShellCheckResult& result) {
+  const std::size_t n_points = mesh.points.size();
+  for (std::size_t t = 0; t < mesh.tets.size(); ++t)
+    for (const std::uint32_t v : mesh.tets[t])
+      if (v >= n_points)
+        throw InputError("check_shell: tet " + std::to_string(t) + " refers to point " +
+                         std::to_string(v) + ", but the tet mesh has " +
+                         std::to_string(n_points) + " points");
+  for (std::size_t v = 0; v < n_points; ++v)
+    if (!is_finite(mesh.points[v]))
+      throw InputError("check_shell: point " + std::to_string(v) +
+                       " of the tet mesh has a NaN or infinite coordinate");
+  if (!mesh.inner.empty() && mesh.inner.size() != n_points)
+    throw InputError("check_shell: " + std::to_string(mesh.inner.size()) + " inner flags for " +
+                     std::to_string(n_points) + " points; give one per point or none");
+
+  result.tets = mesh.tets.size();
+  result.faces = surface.triangles.size();
+  result.too_many_tets = result.tets > 3 * result.faces;
+  const std::size_t max_listed = options.max_listed;
+
+  count_volumes(mesh, options, result);
 
   // Surface points kept.
   const std::size_t n_surface = surface.points.size();
@@ -756,34 +764,385 @@ ShellCheckResult check_shell(const SurfaceMesh& surface, const TetMesh& mesh,
     }
   }
 
-  // Inner points inside.
-  const InsideTester tester(surface,
-                            options.on_surface_tolerance * bounding_box(surface).diagonal());
+  check_faces(surface, mesh, options, result);
+
   std::vector<std::uint32_t> inner_points;
   for (std::size_t v = 0; v < n_points; ++v)
     if (mesh.inner.empty() ? v >= n_surface : mesh.inner[v] != 0)
       inner_points.push_back(static_cast<std::uint32_t>(v));
   result.checked_inner_vertices = inner_points.size();
-  if (!inner_points.empty()) {
-    std::vector<std::uint8_t> outside(inner_points.size(), 0);
-    for_each_index(inner_points.size(), [&](std::size_t i) {
-      outside[i] = tester.outside(mesh.points[inner_points[i]]) ? 1 : 0;
-    });
-    for (std::size_t i = 0; i < inner_points.size(); ++i) {
-      if (outside[i]) {
-        ++result.outside_inner_vertices;
-        list_item(result.first_outside_vertices, max_listed, inner_points[i]);
-      }
+  return inner_points;
+}
+
+void record_outside_points(const std::vector<std::uint32_t>& inner_points,
+                           const std::vector<std::uint8_t>& outside,
+                           const ShellCheckOptions& options, ShellCheckResult& result) {
+  for (std::size_t i = 0; i < inner_points.size(); ++i) {
+    if (outside[i]) {
+      ++result.outside_inner_vertices;
+      list_item(result.first_outside_vertices, options.max_listed, inner_points[i]);
     }
   }
+}
 
-  check_faces(surface, mesh, options, result);
+double on_surface_distance(const SurfaceMesh& surface, const ShellCheckOptions& options) {
+  return options.on_surface_tolerance * bounding_box(surface).diagonal();
+}
+
+}  // namespace
+
+bool ShellCheckResult::valid() const {
+  return inverted_tets == 0 && zero_volume_tets == 0 && outside_inner_vertices == 0 &&
+         moved_surface_points == 0 && missing_triangles == 0 && shared_triangles == 0 &&
+         misoriented_triangles == 0 && nonmanifold_faces == 0 && overlapping_pairs == 0 &&
+         leaking_tets == 0 && !too_many_tets;
+}
+
+ShellCheckResult check_volumes(const TetMesh& mesh, const ShellCheckOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  ShellCheckResult result;
+  result.tets = mesh.tets.size();
+  count_volumes(mesh, options, result);
+  result.seconds = seconds_since(start);
+  return result;
+}
+
+ShellCheckResult check_shell(const SurfaceMesh& surface, const TetMesh& mesh,
+                             const ShellCheckOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  ShellCheckResult result;
+  const std::vector<std::uint32_t> inner_points = check_basics(surface, mesh, options, result);
+
+  // Inner points inside.
+  const InsideTester tester(surface, on_surface_distance(surface, options));
+  std::vector<std::uint8_t> outside(inner_points.size(), 0);
+  for_each_index(inner_points.size(), [&](std::size_t i) {
+    outside[i] = tester.outside(mesh.points[inner_points[i]]) ? 1 : 0;
+  });
+  record_outside_points(inner_points, outside, options, result);
 
   if (options.check_overlaps || options.check_leaks) {
     const auto intersection_start = std::chrono::steady_clock::now();
     check_tet_intersections(surface, mesh, tester, options, result);
     result.intersection_seconds = seconds_since(intersection_start);
   }
+  result.seconds = seconds_since(start);
+  return result;
+}
+
+// ---------------------------------------------------------------------------------------------
+// ShellChecker: the same checks, repeated on shells that change a few prisms at a time.
+//
+// A uniform grid over the surface's box (grown to hold the first shell) is built once, with
+// the surface triangles entered once and the tets of every prism entered under the key
+// 3 * prism + k and moved when their prism moves. A call tests the "dirty" prisms — changed
+// since the previous call, or offending in it — against everything, and trusts every other
+// pair: both of its tets are where they were when the pair was last tested, and it passed.
+
+struct ShellChecker::Impl {
+  Impl(const SurfaceMesh& s, const ShellCheckOptions& o)
+      : surface(s), options(o), tester(s, on_surface_distance(s, o)) {}
+
+  struct Prism {
+    int count = 0;
+    std::array<TetGeometry, 3> geo;
+    std::array<std::vector<std::uint32_t>, 3> cells;  // empty and stray: outside the grid
+    std::array<bool, 3> stray{};
+  };
+
+  const SurfaceMesh& surface;
+  ShellCheckOptions options;
+  InsideTester tester;
+  std::unique_ptr<TetGrid> grid;
+  std::vector<std::uint32_t> triangle_start, triangle_items;  // surface triangles per cell
+  std::vector<std::vector<std::uint32_t>> cell_keys;           // tet keys per cell
+  std::vector<std::uint32_t> stray_keys;                       // tets outside the grid's box
+  std::vector<Prism> prisms;
+  std::vector<std::uint8_t> offended;  // per prism, in the previous call
+  std::map<std::array<double, 3>, bool> outside_cache;
+
+  void build_grid(const std::vector<TetGeometry>& geo) {
+    BBox box = bounding_box(surface);
+    const BBox tets = bounding_box_of(geo);
+    box.expand(tets.lo);
+    box.expand(tets.hi);
+    const double margin = 0.05 * box.diagonal();
+    box.expand(box.lo - Vec3d{margin, margin, margin});
+    box.expand(box.hi + Vec3d{margin, margin, margin});
+    grid = std::make_unique<TetGrid>(box, grid_cell_size(geo, box, 32.0));
+    cell_keys.assign(grid->num_cells(), {});
+    const std::size_t n_faces = surface.triangles.size();
+    std::vector<std::vector<std::uint32_t>> cells(n_faces);
+    for_each_index(n_faces, [&](std::size_t f) {
+      const Triangle& tri = surface.triangles[f];
+      const std::array<Vec3d, 3> t = {surface.points[tri[0]], surface.points[tri[1]],
+                                      surface.points[tri[2]]};
+      cells[f].resize(grid->cells_of_triangle(t, nullptr));
+      grid->cells_of_triangle(t, cells[f].data());
+    });
+    triangle_start.assign(grid->num_cells() + 1, 0);
+    for (const auto& list : cells)
+      for (const std::uint32_t c : list) ++triangle_start[c + 1];
+    for (std::size_t c = 0; c < grid->num_cells(); ++c) triangle_start[c + 1] += triangle_start[c];
+    triangle_items.resize(triangle_start.back());
+    std::vector<std::uint32_t> fill(triangle_start.begin(), triangle_start.end() - 1);
+    for (std::size_t f = 0; f < n_faces; ++f)
+      for (const std::uint32_t c : cells[f])
+        triangle_items[fill[c]++] = static_cast<std::uint32_t>(f);
+  }
+
+  void remove(std::uint32_t key) {
+    Prism& p = prisms[key / 3];
+    const int k = static_cast<int>(key % 3);
+    if (p.stray[k]) {
+      stray_keys.erase(std::find(stray_keys.begin(), stray_keys.end(), key));
+      p.stray[k] = false;
+    }
+    for (const std::uint32_t c : p.cells[k]) {
+      std::vector<std::uint32_t>& list = cell_keys[c];
+      *std::find(list.begin(), list.end(), key) = list.back();
+      list.pop_back();
+    }
+    p.cells[k].clear();
+  }
+
+  void insert(std::uint32_t key) {
+    Prism& p = prisms[key / 3];
+    const int k = static_cast<int>(key % 3);
+    if (p.stray[k]) {
+      stray_keys.push_back(key);
+    } else {
+      for (const std::uint32_t c : p.cells[k]) cell_keys[c].push_back(key);
+    }
+  }
+
+  // Calls visit(other) once for every tet key that may touch tet `key` (the stray tets
+  // included), using `mark` (one entry per key, never equal to stamp before) to skip repeats.
+  template <class Visit>
+  void for_each_candidate(std::uint32_t key, std::vector<std::uint32_t>& mark,
+                          std::uint32_t stamp, const Visit& visit) const {
+    const Prism& p = prisms[key / 3];
+    const int k = static_cast<int>(key % 3);
+    auto once = [&](std::uint32_t other) {
+      if (mark[other] == stamp) return;
+      mark[other] = stamp;
+      visit(other);
+    };
+    if (p.stray[k]) {
+      for (std::uint32_t f = 0; f < prisms.size(); ++f)
+        for (int j = 0; j < prisms[f].count; ++j) once(3 * f + static_cast<std::uint32_t>(j));
+      return;
+    }
+    for (const std::uint32_t c : p.cells[k])
+      for (const std::uint32_t other : cell_keys[c]) once(other);
+    for (const std::uint32_t other : stray_keys) once(other);
+  }
+
+  // Calls visit(f) once for every surface triangle f that may cross tet `key`, as above.
+  template <class Visit>
+  void for_each_triangle(std::uint32_t key, std::vector<std::uint32_t>& mark, std::uint32_t stamp,
+                         const Visit& visit) const {
+    const Prism& p = prisms[key / 3];
+    const int k = static_cast<int>(key % 3);
+    if (p.stray[k]) {
+      for (std::uint32_t f = 0; f < surface.triangles.size(); ++f) visit(f);
+      return;
+    }
+    for (const std::uint32_t c : p.cells[k])
+      for (std::uint32_t i = triangle_start[c]; i < triangle_start[c + 1]; ++i) {
+        const std::uint32_t f = triangle_items[i];
+        if (mark[f] == stamp) continue;
+        mark[f] = stamp;
+        visit(f);
+      }
+  }
+};
+
+ShellChecker::ShellChecker(const SurfaceMesh& surface, const ShellCheckOptions& options)
+    : impl_(std::make_unique<Impl>(surface, options)) {}
+
+ShellChecker::~ShellChecker() = default;
+
+ShellCheckResult ShellChecker::check(const TetMesh& mesh) {
+  Impl& m = *impl_;
+  const ShellCheckOptions& options = m.options;
+  const auto start = std::chrono::steady_clock::now();
+  ShellCheckResult result;
+  const std::vector<std::uint32_t> inner_points = check_basics(m.surface, mesh, options, result);
+
+  // Inner points inside, each position tested once over all calls.
+  {
+    std::vector<std::uint8_t> outside(inner_points.size(), 0);
+    std::vector<std::size_t> unknown;
+    for (std::size_t i = 0; i < inner_points.size(); ++i) {
+      const Vec3d& p = mesh.points[inner_points[i]];
+      const auto it = m.outside_cache.find({p.x, p.y, p.z});
+      if (it == m.outside_cache.end())
+        unknown.push_back(i);
+      else
+        outside[i] = it->second ? 1 : 0;
+    }
+    for_each_index(unknown.size(), [&](std::size_t j) {
+      outside[unknown[j]] = m.tester.outside(mesh.points[inner_points[unknown[j]]]) ? 1 : 0;
+    });
+    for (const std::size_t i : unknown) {
+      const Vec3d& p = mesh.points[inner_points[i]];
+      m.outside_cache.emplace(std::array<double, 3>{p.x, p.y, p.z}, outside[i] != 0);
+    }
+    record_outside_points(inner_points, outside, options, result);
+  }
+  if (!options.check_overlaps && !options.check_leaks) {
+    result.seconds = seconds_since(start);
+    return result;
+  }
+  const auto intersection_start = std::chrono::steady_clock::now();
+
+  // Prisms: tets grouped by source triangle, at most 3 each.
+  const std::size_t n_faces = m.surface.triangles.size();
+  const std::size_t n = mesh.tets.size();
+  if (mesh.source_triangle.size() != n)
+    throw InputError("ShellChecker: the tet mesh has no source triangle per tet; pass an "
+                     "assemble_shell() result");
+  std::vector<std::uint32_t> first(n_faces + 1, 0);
+  for (std::size_t t = 0; t < n; ++t) {
+    const std::uint32_t f = mesh.source_triangle[t];
+    if (f >= n_faces || (t > 0 && f < mesh.source_triangle[t - 1]))
+      throw InputError("ShellChecker: tet " + std::to_string(t) + " has source triangle " +
+                       std::to_string(f) + " out of order or range; pass an assemble_shell() "
+                       "result");
+    ++first[f + 1];
+  }
+  for (std::size_t f = 0; f < n_faces; ++f) {
+    if (first[f + 1] > 3)
+      throw InputError("ShellChecker: triangle " + std::to_string(f) +
+                       " has more than 3 tets; pass an assemble_shell() result");
+    first[f + 1] += first[f];
+  }
+
+  // Which prisms moved: their new geometry, compared corner by corner.
+  const bool initial = m.prisms.empty();
+  if (initial) {
+    m.prisms.resize(n_faces);
+    m.offended.assign(n_faces, 0);
+  }
+  std::vector<Impl::Prism> fresh(n_faces);
+  std::vector<std::uint8_t> changed(n_faces, 0);
+  for_each_index(n_faces, [&](std::size_t f) {
+    const int count = static_cast<int>(first[f + 1] - first[f]);
+    const Impl::Prism& old = m.prisms[f];
+    bool same = !initial && old.count == count;
+    for (int k = 0; k < count; ++k) {
+      const Tet& v = mesh.tets[first[f] + static_cast<std::uint32_t>(k)];
+      const std::array<Vec3d, 4> p = {mesh.points[v[0]], mesh.points[v[1]], mesh.points[v[2]],
+                                      mesh.points[v[3]]};
+      if (same && p != old.geo[static_cast<std::size_t>(k)].p) same = false;
+      fresh[f].geo[static_cast<std::size_t>(k)] = tet_geometry(p);
+    }
+    fresh[f].count = count;
+    changed[f] = same ? 0 : 1;
+  });
+  if (initial) {
+    std::vector<TetGeometry> all;
+    all.reserve(n);
+    for (const Impl::Prism& p : fresh)
+      for (int k = 0; k < p.count; ++k) all.push_back(p.geo[static_cast<std::size_t>(k)]);
+    m.build_grid(all);
+  }
+  std::vector<std::uint32_t> moved, dirty;
+  for (std::uint32_t f = 0; f < n_faces; ++f) {
+    if (changed[f]) moved.push_back(f);
+    if (changed[f] || m.offended[f]) dirty.push_back(f);
+  }
+  // Move the changed prisms in the grid: new cells in parallel, then the lists in order.
+  for_each_index(moved.size(), [&](std::size_t i) {
+    Impl::Prism& p = fresh[moved[i]];
+    for (int k = 0; k < p.count; ++k) {
+      const auto kk = static_cast<std::size_t>(k);
+      p.stray[kk] = !m.grid->contains(p.geo[kk].box);
+      if (p.stray[kk]) continue;
+      p.cells[kk].resize(m.grid->cells_of(p.geo[kk], nullptr));
+      m.grid->cells_of(p.geo[kk], p.cells[kk].data());
+    }
+  });
+  for (const std::uint32_t f : moved) {
+    for (int k = 0; k < m.prisms[f].count; ++k) m.remove(3 * f + static_cast<std::uint32_t>(k));
+    m.prisms[f] = std::move(fresh[f]);
+    for (int k = 0; k < m.prisms[f].count; ++k) m.insert(3 * f + static_cast<std::uint32_t>(k));
+  }
+
+  // Every tet of a dirty prism against its candidates; a pair of two dirty tets once, from the
+  // smaller key. Results per dirty prism, in tet order.
+  struct Found {
+    std::vector<std::array<std::uint32_t, 2>> pairs;
+    std::vector<std::uint32_t> leaking;
+    std::size_t candidates = 0;
+  };
+  std::vector<std::uint8_t> is_dirty(n_faces, 0);
+  for (const std::uint32_t f : dirty) is_dirty[f] = 1;
+  std::vector<Found> found(dirty.size());
+  for_each_chunk(
+      dirty.size(),
+      [&](std::size_t begin, std::size_t end) {
+        std::vector<std::uint32_t> tet_mark(3 * n_faces, 0), triangle_mark(n_faces, 0);
+        for (std::size_t i = begin; i != end; ++i) {
+          const std::uint32_t f = dirty[i];
+          const Impl::Prism& p = m.prisms[f];
+          Found& out = found[i];
+          for (int k = 0; k < p.count; ++k) {
+            const std::uint32_t key = 3 * f + static_cast<std::uint32_t>(k);
+            const TetGeometry& a = p.geo[static_cast<std::size_t>(k)];
+            const std::uint32_t ta = first[f] + static_cast<std::uint32_t>(k);
+            if (options.check_overlaps) {
+              m.for_each_candidate(key, tet_mark, key + 1, [&](std::uint32_t other) {
+                const std::uint32_t g = other / 3;
+                if (other == key || (is_dirty[g] && other < key)) return;
+                const TetGeometry& b = m.prisms[g].geo[other % 3];
+                if (!boxes_overlap(a.box, b.box)) return;
+                ++out.candidates;
+                if (!tets_intersect(a, b, options)) return;
+                const std::uint32_t tb = first[g] + other % 3;
+                out.pairs.push_back({std::min(ta, tb), std::max(ta, tb)});
+              });
+            }
+            if (options.check_leaks) {
+              bool leak = centroid_outside(m.tester, a);
+              if (!leak)
+                m.for_each_triangle(key, triangle_mark, key + 1, [&](std::uint32_t t) {
+                  if (!leak && surface_triangle_crosses(m.surface, t, a, options)) leak = true;
+                });
+              if (leak) out.leaking.push_back(ta);
+            }
+          }
+        }
+      },
+      std::max<std::size_t>(16, dirty.size() / 32));
+
+  std::vector<std::array<std::uint32_t, 2>> pairs;
+  std::vector<std::uint32_t> leaking;
+  for (const Found& f : found) {
+    result.overlap_candidate_pairs += f.candidates;
+    pairs.insert(pairs.end(), f.pairs.begin(), f.pairs.end());
+    leaking.insert(leaking.end(), f.leaking.begin(), f.leaking.end());
+  }
+  std::sort(pairs.begin(), pairs.end());
+  result.overlaps_checked = options.check_overlaps;
+  result.overlapping_pairs = pairs.size();
+  for (const auto& pair : pairs)
+    if (result.first_overlapping_pairs.size() < options.max_listed)
+      result.first_overlapping_pairs.push_back(pair);
+  result.leaks_checked = options.check_leaks;
+  result.leaking_tets = leaking.size();  // in increasing order already: dirty is sorted
+  for (const std::uint32_t t : leaking) list_item(result.first_leaking_tets, options.max_listed, t);
+
+  // Prisms offending now are tested again next time, whether they move or not.
+  std::fill(m.offended.begin(), m.offended.end(), 0);
+  auto offend = [&](std::uint32_t t) { m.offended[mesh.source_triangle[t]] = 1; };
+  for (const auto& pair : pairs) {
+    offend(pair[0]);
+    offend(pair[1]);
+  }
+  for (const std::uint32_t t : leaking) offend(t);
+  result.intersection_seconds = seconds_since(intersection_start);
   result.seconds = seconds_since(start);
   return result;
 }

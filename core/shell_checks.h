@@ -33,6 +33,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -57,10 +58,6 @@ struct ShellCheckOptions {
   /// How many offending elements each list in the result keeps (lowest indices first);
   /// std::numeric_limits<std::size_t>::max() lists all of them.
   std::size_t max_listed = 5;
-  /// When set (one flag per tet): check only the flagged tets — their volumes, leaks, and
-  /// overlaps with any tet — and trust the others (the incremental use of make_valid_shell).
-  /// Faces, surface points and inner points are always checked in full.
-  const std::vector<std::uint8_t>* focus = nullptr;
 };
 
 /// What check_shell() found. Lists hold the first offending elements in index order.
@@ -113,6 +110,37 @@ struct ShellCheckResult {
 ///        mesh.inner is neither empty nor of one entry per point.
 ShellCheckResult check_shell(const SurfaceMesh& surface, const TetMesh& mesh,
                              const ShellCheckOptions& options = {});
+
+/// Only the volume checks of check_shell() (inverted and zero-volume tets; the other counts
+/// stay 0): the cheap first test of a candidate shell. \pre every tet index is in range.
+ShellCheckResult check_volumes(const TetMesh& mesh, const ShellCheckOptions& options = {});
+
+/// Checks a sequence of shells on one surface that differ from one call to the next in a few
+/// prisms — the search of make_valid_shell() — at a cost that follows the prisms that changed.
+///
+/// Every mesh must be an assemble_shell() result (assemble.h): tets grouped by
+/// TetMesh::source_triangle in triangle order, at most 3 per triangle. Volumes, surface points,
+/// boundary faces and inner points are checked in full on every call (inner points once per
+/// distinct position). The overlap and leak tests only test the tets of "dirty" prisms — whose
+/// tets moved since the previous call, or that offended in it — against all others, and trust
+/// every other pair: both its tets are where they were when the pair last passed. The listed
+/// offenders therefore always involve a dirty prism, and valid() is check_shell()'s verdict.
+/// A grid over the surface's box is built once, at the first call, and the tets of a prism are
+/// moved in it when the prism moves.
+class ShellChecker {
+ public:
+  explicit ShellChecker(const SurfaceMesh& surface, const ShellCheckOptions& options = {});
+  ~ShellChecker();
+  ShellChecker(const ShellChecker&) = delete;
+  ShellChecker& operator=(const ShellChecker&) = delete;
+
+  /// \throw InputError as check_shell(), or for a mesh that is not an assemble_shell() result.
+  ShellCheckResult check(const TetMesh& mesh);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 /// One line per failed check ("3 inverted tets (first: 12, 40, 41)"); "" when valid.
 std::string describe_problems(const ShellCheckResult& result);

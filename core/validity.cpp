@@ -139,16 +139,6 @@ class ShellSearch {
     return in;
   }
 
-  /// Checks `mesh`; with `focus`, only its flagged tets (the others are known to be fine).
-  ShellCheckResult check(const TetMesh& mesh,
-                         const std::vector<std::uint8_t>* focus = nullptr) const {
-    ShellCheckOptions o;
-    o.max_listed = std::numeric_limits<std::size_t>::max();
-    o.focus = focus;
-    ++checks_run_;
-    return check_shell(surface_, mesh, o);
-  }
-
  private:
   const SurfaceMesh& surface_;
   const TraceResult& traces_;
@@ -156,31 +146,7 @@ class ShellSearch {
   std::vector<double> full_, floor_;
   std::vector<Vec3d> fallback_, correction_;
   std::vector<std::uint32_t> group_size_;
-
- public:
-  mutable int checks_run_ = 0;
 };
-
-/// Inner positions of every prism (3 per triangle), to tell which prisms a round changed.
-std::vector<Vec3d> prism_inner_points(const SurfaceMesh& surface, const ShellInput& in) {
-  std::vector<Vec3d> out;
-  out.reserve(surface.triangles.size() * 3);
-  for (const Triangle& t : surface.triangles)
-    for (std::uint32_t v : t) out.push_back(in.inner_points[in.inner_id[v]]);
-  return out;
-}
-
-/// One flag per tet of `mesh`: its prism's inner points differ between `before` and `after`.
-std::vector<std::uint8_t> changed_tets(const TetMesh& mesh, const std::vector<Vec3d>& before,
-                                       const std::vector<Vec3d>& after) {
-  std::vector<std::uint8_t> focus(mesh.tets.size(), 0);
-  for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
-    const std::size_t f = mesh.source_triangle[t];
-    for (int k = 0; k < 3; ++k)
-      if (before[3 * f + k] != after[3 * f + k]) focus[t] = 1;
-  }
-  return focus;
-}
 
 /// Offending tets and inner slots of a check.
 void collect_offenders(const SurfaceMesh& surface, const ShellInput& in,
@@ -218,32 +184,24 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
   AssembleOptions no_quality;
   no_quality.compute_quality = false;
 
-  // The floor configuration must be valid for the search to be guaranteed to end valid.
-  {
-    const State floor = search.floor_state();
-    const ShellInput in = search.build(floor, members);
-    const AssembleResult shell = assemble_shell(surface, in, no_quality);
-    ShellCheckOptions o;
-    const ShellCheckResult c = check_shell(surface, shell.mesh, o);
-    out.floor_valid = c.valid();
-    if (!out.floor_valid) out.floor_problems = describe_problems(c);
-  }
+  ShellCheckOptions check_options;
+  check_options.max_listed = std::numeric_limits<std::size_t>::max();
+  ShellChecker checker(surface, check_options);
+  // Inverted tets first: they are found in O(T) and a shell with any is not worth the rest.
+  auto check = [&](const TetMesh& mesh) {
+    ShellCheckResult volumes = check_volumes(mesh, check_options);
+    if (!volumes.valid()) return volumes;
+    ++out.checks_run;
+    return checker.check(mesh);
+  };
 
   State s = search.initial();
   std::vector<std::uint32_t> bad_tets, bad_slots;
   std::vector<char> lowered(n);
-  std::vector<Vec3d> previous;
   for (;; ++out.rounds) {
     out.input = search.build(s, members);
     out.shell = assemble_shell(surface, out.input, no_quality);
-    const std::vector<Vec3d> current = prism_inner_points(surface, out.input);
-    if (previous.empty()) {
-      out.checks = search.check(out.shell.mesh);
-    } else {
-      const std::vector<std::uint8_t> focus = changed_tets(out.shell.mesh, previous, current);
-      out.checks = search.check(out.shell.mesh, &focus);
-    }
-    previous = current;
+    out.checks = check(out.shell.mesh);
     if (out.checks.valid() || out.rounds >= options.max_rounds) break;
     collect_offenders(surface, out.input, out.checks, bad_tets, bad_slots);
     std::fill(lowered.begin(), lowered.end(), 0);
@@ -282,7 +240,14 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
     }
     for (std::uint32_t slot : bad_slots)
       if (slot_depth(slot) > 0) lower(slot);
-    if (!progress) break;  // only floor elements offend: the floor itself is invalid
+    if (!progress) {
+      // Only elements at the floor offend: the floor configuration itself must be invalid.
+      const ShellInput in = search.build(search.floor_state(), members);
+      const ShellCheckResult c = check_shell(surface, assemble_shell(surface, in, no_quality).mesh);
+      out.floor_valid = c.valid();
+      if (!out.floor_valid) out.floor_problems = describe_problems(c);
+      break;
+    }
   }
 
   // Refinement: move moved-back vertices one level deeper where that stays valid.
@@ -297,13 +262,10 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
         }
       if (raised.empty()) break;
       // Undo the raises that offend until the trial is valid (bounded: each undo is final).
-      const std::vector<Vec3d> accepted = prism_inner_points(surface, out.input);
       for (int round = 0; round < options.max_rounds; ++round) {
         ShellInput in = search.build(trial, members);
         AssembleResult shell = assemble_shell(surface, in, no_quality);
-        const std::vector<std::uint8_t> focus =
-            changed_tets(shell.mesh, accepted, prism_inner_points(surface, in));
-        ShellCheckResult c = search.check(shell.mesh, &focus);
+        ShellCheckResult c = check(shell.mesh);
         if (c.valid()) {
           s = trial;
           out.input = std::move(in);
@@ -343,7 +305,7 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
       sum += (search.full()[v] - s.t[v]) / search.full()[v];
     }
   out.moved_back_mean = out.moved_back ? sum / static_cast<double>(out.moved_back) : 0.0;
-  out.checks_run = search.checks_run_ + 2;  // plus the floor and the final full check
+  ++out.checks_run;  // the final full check
   out.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return out;

@@ -5,20 +5,27 @@
 // every prism positive (for the split actually used), no two tets intersecting, no tet leaving
 // the surface, every inner vertex inside, every input triangle a boundary face.
 //
-// Method: start from the traced (and welded) end points. Assemble, check everything
-// (check_shell), and for every offending element move back the deepest of its movable vertices,
-// t_v <- max(t_min_v, shrink * t_v) (a welded group leaves its weld when any member moves).
-// Repeat until no element offends.
+// Method: start from the traced (and welded) end points. Assemble and check: first the tet
+// volumes alone (O(T)), and only when no tet is inverted or flat everything else (overlaps,
+// leaks, inner points, faces). For every offending element move back the deepest of its movable
+// vertices, t_v <- max(t_min_v, shrink * t_v) (a welded group leaves its weld when any member
+// moves). Repeat until no element offends. Fixing inversions before looking for overlaps keeps
+// the vertices that only overlap an inverted neighbour where they are.
 //
 // Why it terminates with a valid shell: every round lowers at least one t_v by a fixed factor
 // down to a floor t_min_v > 0, so there are finitely many rounds. The floor configuration
-// (every vertex at t_min_v, no welds) is checked to be valid first — it is a thin offset along
-// each trace's first, inward direction — and an offending element whose vertices are all at
-// the floor is an element of that valid configuration, which is impossible. So an offending
-// element always has a vertex above its floor, and the loop ends with no offending element.
+// (every vertex at t_min_v, no welds) is a thin offset along each trace's first, inward
+// direction, bent where needed to point inward for every incident face, so it is valid; an
+// offending element whose vertices are all at the floor is an element of that configuration,
+// which is impossible. So an offending element always has a vertex above its floor, and the
+// loop ends with no offending element. Should a round find only floor elements offending, the
+// floor configuration is checked and the run fails, naming what it broke.
 // Vertices that were never involved keep their full depth: the shell stays as thick as the
 // traces allow wherever it is already valid. Refinement passes then try to move each moved-back
 // vertex deeper again (by 1/sqrt(shrink)), keeping every move that stays valid.
+//
+// Cost: one ShellChecker (shell_checks.h) serves every round, testing only the prisms that
+// moved since the previous round (or still offend); the result gets one full check_shell().
 #pragma once
 
 #include <cstddef>
@@ -35,7 +42,7 @@ struct ValidityOptions {
   double shrink = 0.7;          ///< factor applied to t_v of a moved-back vertex, in (0, 1)
   double floor_fraction = 0.02; ///< t_min_v = this * shortest incident edge (capped at full)
   int max_rounds = 400;         ///< safety net; the floor is then applied to every offender
-  int refine_passes = 4;        ///< passes moving moved-back vertices deeper again (0: none)
+  int refine_passes = 2;        ///< passes moving moved-back vertices deeper again (0: none)
 };
 
 struct ValidShell {
@@ -48,7 +55,7 @@ struct ValidShell {
   std::size_t moved_back = 0;     ///< vertices whose final t_v is below their traced depth
   double moved_back_mean = 0;     ///< mean (traced - final) / traced over moved-back vertices
   std::size_t unwelded = 0;       ///< vertices that left their weld
-  bool floor_valid = true;        ///< the floor configuration passed the checks
+  bool floor_valid = true;        ///< false: the search stalled and the floor failed too
   std::string floor_problems;     ///< what the floor configuration broke, when it did
   double seconds = 0;
 };

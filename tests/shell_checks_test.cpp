@@ -356,5 +356,72 @@ TEST(ShellChecks, FortyThousandTetsInUnderASecond) {
   }
 }
 
+TEST(ShellChecker, AgreesWithCheckShellAlongASequenceOfMoves) {
+  // A valid sphere shell, then steps that each move a few inner vertices — out of the surface,
+  // onto another vertex's place (inverting and overlapping prisms), or back home — checked both
+  // by a ShellChecker that sees every step and by a fresh check_shell(): the same offenders.
+  const SurfaceMesh s = make_shape("sphere", 2);
+  const std::size_t n = s.points.size();
+  ShellInput in;
+  for (std::size_t v = 0; v < n; ++v) {
+    in.inner_points.push_back(s.points[v] * 0.6);
+    in.inner_id.push_back(static_cast<std::uint32_t>(v));
+  }
+  const std::vector<Vec3d> home = in.inner_points;
+  ShellCheckOptions options;
+  options.max_listed = std::numeric_limits<std::size_t>::max();
+  ShellChecker checker(s, options);
+  std::mt19937 rng(7);
+  std::size_t invalid_steps = 0;
+  for (int step = 0; step < 24; ++step) {
+    SCOPED_TRACE("step " + std::to_string(step));
+    if (step > 0) {
+      for (int k = 0; k < 3; ++k) {
+        const std::size_t v = rng() % n;
+        switch (rng() % 3) {
+          case 0: in.inner_points[v] = s.points[v] * 1.3; break;         // outside
+          case 1: in.inner_points[v] = home[(v * 7 + 13) % n]; break;    // folds prisms
+          default: in.inner_points[v] = home[v]; break;                  // back home
+        }
+      }
+    }
+    const TetMesh mesh = assemble_shell(s, in).mesh;
+    const ShellCheckResult full = check_shell(s, mesh, options);
+    const ShellCheckResult incremental = checker.check(mesh);
+    EXPECT_EQ(incremental.valid(), full.valid());
+    EXPECT_EQ(incremental.first_inverted_tets, full.first_inverted_tets);
+    EXPECT_EQ(incremental.first_outside_vertices, full.first_outside_vertices);
+    EXPECT_EQ(incremental.first_overlapping_pairs, full.first_overlapping_pairs);
+    EXPECT_EQ(incremental.first_leaking_tets, full.first_leaking_tets);
+    EXPECT_EQ(describe_problems(incremental), describe_problems(full));
+    if (!full.valid()) ++invalid_steps;
+  }
+  EXPECT_GT(invalid_steps, 5u);  // the sequence did break things
+}
+
+TEST(ShellChecker, VolumesOnlyCheckFindsTheInvertedTets) {
+  const SurfaceMesh s = make_shape("sphere", 2);
+  TetMesh m = scaled_shell(s, 0.5);
+  const std::size_t n = s.points.size();
+  for (std::size_t v = 0; v < n; v += 97) m.points[n + v] = m.points[n + (v * 7 + 13) % n];
+  ShellCheckOptions options;
+  options.max_listed = std::numeric_limits<std::size_t>::max();
+  const ShellCheckResult volumes = check_volumes(m, options);
+  const ShellCheckResult full = check_shell(s, m, options);
+  EXPECT_GT(volumes.inverted_tets, 0u);
+  EXPECT_EQ(volumes.first_inverted_tets, full.first_inverted_tets);
+  EXPECT_EQ(volumes.first_zero_volume_tets, full.first_zero_volume_tets);
+  EXPECT_FALSE(volumes.valid());
+  EXPECT_TRUE(check_volumes(scaled_shell(s, 0.5)).valid());
+}
+
+TEST(ShellChecker, RejectsAMeshThatIsNotAnAssembledShell) {
+  const SurfaceMesh s = make_shape("box", 1);
+  TetMesh m = scaled_shell(s, 0.5);
+  ShellChecker checker(s);
+  m.source_triangle.clear();
+  EXPECT_THROW(checker.check(m), InputError);
+}
+
 }  // namespace
 }  // namespace vdb_shell
