@@ -280,7 +280,8 @@ RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& 
                         const std::string& progress_prefix) {
   const auto t_total = Clock::now();
   const bool shell_wanted = !opt.output.empty();
-  const int stages = shell_wanted ? 6 : (opt.grids.empty() ? 1 : 3);
+  // Stages: read; with --grids alone also fields, trace, write; with -o all six.
+  const int stages = shell_wanted ? 6 : (opt.grids.empty() ? 1 : 4);
   Progress progress(err, opt.show_progress(), stages, progress_prefix);
   RunOutcome outcome;
 
@@ -316,18 +317,18 @@ RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& 
         << fields->stats().sdf_active_voxels << " SDF voxels, "
         << fields->stats().flux_active_voxels << " flux voxels, " << fmt(t_fields) << " s\n";
 
-  if (!shell_wanted) {  // --grids only
+  progress.start("trace");
+  const TraceResult traces = trace_paths(mesh, *fields, opt.trace, make_vdb_point_index);
+  const double t_trace = progress.stop();
+
+  if (!shell_wanted) {  // --grids only: the fields and the traces as points
     progress.start("write");
-    write_grids(opt.grids, *fields, fields->parameters());
+    write_grids(opt.grids, *fields, fields->parameters(), &traces);
     progress.stop();
     if (!opt.quiet) err << "vdb_shell: wrote " << opt.grids << "\n";
     if (opt.verbose) err << "vdb_shell: timings: " << progress.timings() << "\n";
     return outcome;
   }
-
-  progress.start("trace");
-  const TraceResult traces = trace_paths(mesh, *fields, opt.trace, make_vdb_point_index);
-  const double t_trace = progress.stop();
 
   progress.start("inner");
   const InnerVertices inner = place_inner_vertices(mesh, traces, opt.thickness);
@@ -352,7 +353,7 @@ RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& 
 
   progress.start("write");
   write_tet_mesh(opt.output, shell.mesh, tet_format_from_path(opt.output, opt.msh_version));
-  if (!opt.grids.empty()) write_grids(opt.grids, *fields, fields->parameters());
+  if (!opt.grids.empty()) write_grids(opt.grids, *fields, fields->parameters(), &traces);
   if (!opt.paths.empty()) write_paths_vtk(opt.paths, traces);
   if (!opt.inner.empty()) {
     SurfaceMesh inner_surface;
@@ -546,7 +547,7 @@ int run_cli_impl(int argc, const char* const* argv, std::ostream& out, std::ostr
       ->check(CLI::PositiveNumber)
       ->group(fg);
   app.add_option("--grids", opt.grids,
-                 "Write the fields (surface, flux) to this .vdb file")
+                 "Write the fields (surface, flux) and the traces (points) to this .vdb file")
       ->group(fg);
 
   const char* tg = "Tracing";

@@ -21,8 +21,10 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <limits>
@@ -32,6 +34,8 @@
 
 #include "core/atomic_file.h"
 #include "core/errors.h"
+// After the OpenVDB headers: declares make_trace_points_grid() (vdb_ops/trace_points.h).
+#include "vdb_ops/trace_points.h"
 
 namespace vdb_shell {
 
@@ -1458,6 +1462,75 @@ openvdb::GridPtrVec output_grids(const Fields& fields,
   return grids;
 }
 
+/// OpenVDB writes a random UUID into every file header, as 36 characters at byte kUuidOffset
+/// (after the magic number, three version numbers and a flag), so two writes of the same grids
+/// would differ. write_grids() replaces it by one derived from the rest of the file: the same
+/// grids give the same bytes (for any thread count, on every run), and different content still
+/// gets a different UUID, which is what OpenVDB compares it for.
+constexpr std::streamoff kUuidOffset = 21;
+constexpr std::size_t kUuidChars = 36;
+
+/// Forwards every byte to `target`, hashing all but the header's UUID and keeping a copy of it.
+class HashingBuf final : public std::streambuf {
+ public:
+  explicit HashingBuf(std::streambuf* target) : target_(target) {}
+
+  /// "xxxxxxxx-xxxx-8xxx-axxx-xxxxxxxxxxxx" from the hash (RFC 9562 version 8, custom), or ""
+  /// when the header did not hold a UUID where expected (then the file is left as written).
+  std::string content_uuid() const {
+    if (!is_uuid(uuid_)) return "";
+    std::uint64_t hi = hash_, lo = hash_ ^ (bytes_ * 0x9e3779b97f4a7c15ull);
+    lo ^= lo >> 30, lo *= 0xbf58476d1ce4e5b9ull, lo ^= lo >> 27, lo *= 0x94d049bb133111ebull;
+    lo ^= lo >> 31;  // splitmix64 finaliser
+    hi = (hi & ~0xf000ull) | 0x8000ull;                      // version 8
+    lo = (lo & ~(0x3ull << 62)) | (0x2ull << 62);            // variant 10
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%08llx-%04llx-%04llx-%04llx-%012llx",
+                  static_cast<unsigned long long>(hi >> 32),
+                  static_cast<unsigned long long>((hi >> 16) & 0xffff),
+                  static_cast<unsigned long long>(hi & 0xffff),
+                  static_cast<unsigned long long>(lo >> 48),
+                  static_cast<unsigned long long>(lo & 0xffffffffffffull));
+    return buf;
+  }
+
+ protected:
+  std::streamsize xsputn(const char* s, std::streamsize n) override {
+    const std::uint64_t begin = bytes_, end = bytes_ + static_cast<std::uint64_t>(n);
+    const std::uint64_t u0 = kUuidOffset, u1 = u0 + kUuidChars;
+    auto hash = [&](std::uint64_t a, std::uint64_t b) {  // absolute offsets [a, b)
+      if (a < b) hash_ = fnv1a(hash_, s + (a - begin), b - a);
+    };
+    hash(begin, std::min(end, u0));
+    const std::uint64_t c0 = std::max(begin, u0), c1 = std::min(end, u1);
+    if (c0 < c1) uuid_.append(s + (c0 - begin), c1 - c0);
+    hash(std::max(begin, u1), end);
+    bytes_ = end;
+    return target_->sputn(s, n);
+  }
+  int_type overflow(int_type c) override {
+    if (traits_type::eq_int_type(c, traits_type::eof())) return traits_type::not_eof(c);
+    const char ch = traits_type::to_char_type(c);
+    return xsputn(&ch, 1) == 1 ? c : traits_type::eof();
+  }
+  int sync() override { return target_->pubsync(); }
+
+ private:
+  static bool is_uuid(const std::string& u) {
+    if (u.size() != kUuidChars) return false;
+    for (std::size_t i = 0; i < u.size(); ++i) {
+      const bool dash = i == 8 || i == 13 || i == 18 || i == 23;
+      if (dash ? u[i] != '-' : !std::isxdigit(static_cast<unsigned char>(u[i]))) return false;
+    }
+    return true;
+  }
+
+  std::streambuf* target_;
+  std::uint64_t hash_ = 14695981039346656037ull;
+  std::uint64_t bytes_ = 0;
+  std::string uuid_;
+};
+
 void require_readable(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) {
@@ -1468,19 +1541,36 @@ void require_readable(const std::string& path) {
 }  // namespace
 
 void write_grids(const std::string& path, const Fields& fields,
-                 const std::map<std::string, std::string>& metadata) {
+                 const std::map<std::string, std::string>& metadata,
+                 const TraceResult* traces) {
   init_openvdb();
-  const openvdb::GridPtrVec grids = output_grids(fields, metadata);
+  auto tag = [&](openvdb::MetaMap& m) {
+    for (const auto& [k, v] : fields.parameters()) m.insertMeta(k, openvdb::StringMetadata(v));
+    for (const auto& [k, v] : metadata) m.insertMeta(k, openvdb::StringMetadata(v));
+  };
+  openvdb::GridPtrVec grids = output_grids(fields, metadata);
+  if (traces) {
+    grids.push_back(make_trace_points_grid(*traces, fields.impl().sdf->transform()));
+    tag(*grids.back());
+  }
   openvdb::MetaMap file_meta;
-  for (const auto& [k, v] : fields.parameters()) file_meta.insertMeta(k, openvdb::StringMetadata(v));
-  for (const auto& [k, v] : metadata) file_meta.insertMeta(k, openvdb::StringMetadata(v));
+  tag(file_meta);
   write_file_atomically(path, [&](std::ostream& os) {
+    HashingBuf hashing(os.rdbuf());
+    std::ostream hashed(&hashing);
     try {
-      openvdb::io::Stream(os).write(grids, file_meta);
+      openvdb::io::Stream(hashed).write(grids, file_meta);
     } catch (const openvdb::Exception& e) {
       throw ResourceError("cannot write '" + path + "': " + e.what());
     }
-    if (!os) throw ResourceError("cannot write '" + path + "': write failed (disk full?)");
+    const std::string uuid = hashing.content_uuid();
+    if (hashed && !uuid.empty()) {
+      os.seekp(kUuidOffset);
+      os.write(uuid.data(), static_cast<std::streamsize>(uuid.size()));
+      os.seekp(0, std::ios::end);
+    }
+    if (!hashed || !os)
+      throw ResourceError("cannot write '" + path + "': write failed (disk full?)");
   });
 }
 

@@ -48,6 +48,8 @@
 
 namespace vdb_shell {
 
+struct TraceResult;  // core/trace.h
+
 /// Smallest accepted resolution (voxels along the longest bounding-box side).
 inline constexpr int kMinResolution = 8;
 /// Width of the active band outside the surface, voxels (Houdini's default half-width).
@@ -193,12 +195,16 @@ std::unique_ptr<Fields> fields_from_level_set(const std::string& vdb_path,
                                               const SurfaceMesh& mesh,
                                               const FieldOptions& options);
 
-/// Writes `surface` (GRID_LEVEL_SET), `flux` and, if stored, `gradient` to the .vdb file `path`,
-/// atomically (temporary file + rename). Every grid carries fields.parameters() and `metadata`
-/// (string values) as metadata; the file carries them too.
+/// Writes `surface` (GRID_LEVEL_SET), `flux`, if stored `gradient`, and, if `traces` is given,
+/// `traces` (OpenVDB points, one per trace sample up to each end sample, with the `surface`
+/// grid's transform; see vdb_ops/trace_points.h) to the .vdb file `path`, all in one atomic write
+/// (temporary file + rename). Every grid carries fields.parameters() and `metadata` (string
+/// values) as metadata; the file carries them too. The bytes depend only on the content: the
+/// header's UUID, random in OpenVDB, is derived from the rest of the file.
 /// \throw ResourceError naming `path` if the file cannot be written.
 void write_grids(const std::string& path, const Fields& fields,
-                 const std::map<std::string, std::string>& metadata);
+                 const std::map<std::string, std::string>& metadata,
+                 const TraceResult* traces = nullptr);
 
 /// A grid of a .vdb file as the OpenVDB reader sees it (for tests, the CLI and round trips).
 struct VdbGridInfo {
