@@ -645,17 +645,30 @@ bool same_cycle(const std::array<std::uint32_t, 3>& x, const Triangle& y) {
 
 void check_faces(const SurfaceMesh& surface, const TetMesh& mesh,
                  const ShellCheckOptions& options, ShellCheckResult& result) {
-  std::vector<FaceRecord> faces;
-  faces.reserve(4 * mesh.tets.size());
-  for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
-    const Tet& v = mesh.tets[t];
+  // Sorted in two steps: by smallest vertex (counting sort), then within each (small) bucket.
+  const std::size_t n_points = mesh.points.size();
+  std::vector<std::uint32_t> bucket(n_points + 1, 0);
+  for (const Tet& v : mesh.tets)
     for (int k = 0; k < 4; ++k) {
       const int* f = kOutwardFace[k];
-      faces.push_back({sorted3(v[f[0]], v[f[1]], v[f[2]]), static_cast<std::uint32_t>(t),
-                       static_cast<std::uint8_t>(k)});
+      ++bucket[std::min({v[f[0]], v[f[1]], v[f[2]]}) + 1];
+    }
+  for (std::size_t p = 0; p < n_points; ++p) bucket[p + 1] += bucket[p];
+  std::vector<FaceRecord> faces(4 * mesh.tets.size());
+  {
+    std::vector<std::uint32_t> fill(bucket.begin(), bucket.end() - 1);
+    for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
+      const Tet& v = mesh.tets[t];
+      for (int k = 0; k < 4; ++k) {
+        const int* f = kOutwardFace[k];
+        const std::array<std::uint32_t, 3> key = sorted3(v[f[0]], v[f[1]], v[f[2]]);
+        faces[fill[key[0]]++] = {key, static_cast<std::uint32_t>(t), static_cast<std::uint8_t>(k)};
+      }
     }
   }
-  std::sort(faces.begin(), faces.end());
+  for (std::size_t p = 0; p < n_points; ++p)
+    if (bucket[p + 1] - bucket[p] > 1)
+      std::sort(faces.begin() + bucket[p], faces.begin() + bucket[p + 1]);
   for (std::size_t i = 0; i < faces.size();) {
     std::size_t j = i + 1;
     while (j < faces.size() && faces[j].same_key(faces[i])) ++j;
@@ -858,6 +871,7 @@ struct ShellChecker::Impl {
   std::vector<std::vector<std::uint32_t>> cell_keys;           // tet keys per cell
   std::vector<std::uint32_t> stray_keys;                       // tets outside the grid's box
   std::vector<Prism> prisms;
+  std::vector<BBox> key_box;           // per tet key: its box (compact, for the broad phase)
   std::vector<std::uint8_t> offended;  // per prism, in the previous call
   std::map<std::array<double, 3>, bool> outside_cache;
 
@@ -1019,27 +1033,39 @@ ShellCheckResult ShellChecker::check(const TetMesh& mesh) {
     first[f + 1] += first[f];
   }
 
-  // Which prisms moved: their new geometry, compared corner by corner.
+  // Which prisms moved: their tets' corners, compared with the stored ones.
   const bool initial = m.prisms.empty();
   if (initial) {
     m.prisms.resize(n_faces);
+    m.key_box.resize(3 * n_faces);
     m.offended.assign(n_faces, 0);
   }
-  std::vector<Impl::Prism> fresh(n_faces);
+  auto corners = [&](std::uint32_t t) {
+    const Tet& v = mesh.tets[t];
+    return std::array<Vec3d, 4>{mesh.points[v[0]], mesh.points[v[1]], mesh.points[v[2]],
+                                mesh.points[v[3]]};
+  };
   std::vector<std::uint8_t> changed(n_faces, 0);
   for_each_index(n_faces, [&](std::size_t f) {
-    const int count = static_cast<int>(first[f + 1] - first[f]);
     const Impl::Prism& old = m.prisms[f];
-    bool same = !initial && old.count == count;
-    for (int k = 0; k < count; ++k) {
-      const Tet& v = mesh.tets[first[f] + static_cast<std::uint32_t>(k)];
-      const std::array<Vec3d, 4> p = {mesh.points[v[0]], mesh.points[v[1]], mesh.points[v[2]],
-                                      mesh.points[v[3]]};
-      if (same && p != old.geo[static_cast<std::size_t>(k)].p) same = false;
-      fresh[f].geo[static_cast<std::size_t>(k)] = tet_geometry(p);
-    }
-    fresh[f].count = count;
+    bool same = !initial && old.count == static_cast<int>(first[f + 1] - first[f]);
+    for (std::uint32_t t = first[f]; same && t < first[f + 1]; ++t)
+      same = corners(t) == old.geo[t - first[f]].p;
     changed[f] = same ? 0 : 1;
+  });
+  std::vector<std::uint32_t> moved, dirty;
+  for (std::uint32_t f = 0; f < n_faces; ++f) {
+    if (changed[f]) moved.push_back(f);
+    if (changed[f] || m.offended[f]) dirty.push_back(f);
+  }
+  // The moved prisms' new tets (geometry and cells) in parallel, then the grid's lists in order.
+  std::vector<Impl::Prism> fresh(moved.size());
+  for_each_index(moved.size(), [&](std::size_t i) {
+    const std::uint32_t f = moved[i];
+    Impl::Prism& p = fresh[i];
+    p.count = static_cast<int>(first[f + 1] - first[f]);
+    for (std::uint32_t t = first[f]; t < first[f + 1]; ++t)
+      p.geo[t - first[f]] = tet_geometry(corners(t));
   });
   if (initial) {
     std::vector<TetGeometry> all;
@@ -1048,14 +1074,8 @@ ShellCheckResult ShellChecker::check(const TetMesh& mesh) {
       for (int k = 0; k < p.count; ++k) all.push_back(p.geo[static_cast<std::size_t>(k)]);
     m.build_grid(all);
   }
-  std::vector<std::uint32_t> moved, dirty;
-  for (std::uint32_t f = 0; f < n_faces; ++f) {
-    if (changed[f]) moved.push_back(f);
-    if (changed[f] || m.offended[f]) dirty.push_back(f);
-  }
-  // Move the changed prisms in the grid: new cells in parallel, then the lists in order.
   for_each_index(moved.size(), [&](std::size_t i) {
-    Impl::Prism& p = fresh[moved[i]];
+    Impl::Prism& p = fresh[i];
     for (int k = 0; k < p.count; ++k) {
       const auto kk = static_cast<std::size_t>(k);
       p.stray[kk] = !m.grid->contains(p.geo[kk].box);
@@ -1064,9 +1084,12 @@ ShellCheckResult ShellChecker::check(const TetMesh& mesh) {
       m.grid->cells_of(p.geo[kk], p.cells[kk].data());
     }
   });
-  for (const std::uint32_t f : moved) {
+  for (std::size_t i = 0; i < moved.size(); ++i) {
+    const std::uint32_t f = moved[i];
     for (int k = 0; k < m.prisms[f].count; ++k) m.remove(3 * f + static_cast<std::uint32_t>(k));
-    m.prisms[f] = std::move(fresh[f]);
+    m.prisms[f] = std::move(fresh[i]);
+    for (int k = 0; k < m.prisms[f].count; ++k)
+      m.key_box[3 * f + static_cast<std::uint32_t>(k)] = m.prisms[f].geo[static_cast<std::size_t>(k)].box;
     for (int k = 0; k < m.prisms[f].count; ++k) m.insert(3 * f + static_cast<std::uint32_t>(k));
   }
 
@@ -1096,8 +1119,8 @@ ShellCheckResult ShellChecker::check(const TetMesh& mesh) {
               m.for_each_candidate(key, tet_mark, key + 1, [&](std::uint32_t other) {
                 const std::uint32_t g = other / 3;
                 if (other == key || (is_dirty[g] && other < key)) return;
+                if (!boxes_overlap(a.box, m.key_box[other])) return;
                 const TetGeometry& b = m.prisms[g].geo[other % 3];
-                if (!boxes_overlap(a.box, b.box)) return;
                 ++out.candidates;
                 if (!tets_intersect(a, b, options)) return;
                 const std::uint32_t tb = first[g] + other % 3;
