@@ -84,10 +84,10 @@ class ShellSearch {
       // thinnest shell already folds: bend the start of such a trace (within the floor depth)
       // into the most inward direction.
       const Vec3d first = fallback_[v];
+      const double margin = inward_margin(face_normals[v], first);
+      if (margin >= kMinMargin) continue;
       const Vec3d safe = most_inward_direction(face_normals[v], -normalized(normal[v]));
-      if (inward_margin(face_normals[v], first) < kMinMargin &&
-          inward_margin(face_normals[v], safe) > inward_margin(face_normals[v], first))
-        correction_[v] = safe - first;
+      if (inward_margin(face_normals[v], safe) > margin) correction_[v] = safe - first;
     }
   }
 
@@ -291,7 +291,10 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
     }
   }
 
-  // The incremental checks trusted unchanged tets; the result carries one full check.
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  // The incremental checks trusted unchanged tets; the result carries one full check (the
+  // confirmation every run gets, valid search or not: out.checks.seconds, not out.seconds).
   out.shell = assemble_shell(surface, out.input);  // with quality for the report and writers
   {
     ShellCheckOptions o;
@@ -306,8 +309,6 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
     }
   out.moved_back_mean = out.moved_back ? sum / static_cast<double>(out.moved_back) : 0.0;
   ++out.checks_run;  // the final full check
-  out.seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return out;
 }
 

@@ -57,7 +57,7 @@ struct ValidShell {
   std::size_t unwelded = 0;       ///< vertices that left their weld
   bool floor_valid = true;        ///< false: the search stalled and the floor failed too
   std::string floor_problems;     ///< what the floor configuration broke, when it did
-  double seconds = 0;
+  double seconds = 0;             ///< the search, without the final full check (checks.seconds)
 };
 
 /// Finds the thickest valid inner vertices along the traces, starting from `start`.
