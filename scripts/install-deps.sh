@@ -8,7 +8,7 @@ packages=(
   build-essential cmake ninja-build ccache pkg-config
   libopenvdb-dev libboost-dev libtbb-dev libopenmesh-dev
   libgtest-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev
-  libopenvdb-tools gmsh
+  libopenvdb-tools gmsh tetgen
   python3-meshio python3-numpy python3-scipy python3-matplotlib
 )
 

@@ -4,6 +4,13 @@
 // Not part of the test run. Usage:
 //   vdb_shell_bench_fields [--max-resolution N] [--repeat N] [--skip-sweeping] [--skip-queries]
 //                          [MESH ...]
+//   vdb_shell_bench_fields --floor MESH [--resolution R] [--threads N] [--json]
+//       only the floor (meshToLevelSet, half-width 3) of MESH at R (default 128), in this process,
+//       once; one JSON object (or one Markdown row) on stdout. For run_benchmarks.py, which
+//       measures the process's wall time and peak RSS itself.
+//   vdb_shell_bench_fields --write-subdivided IN OUT [--levels N]
+//       midpoint-subdivide IN N times (default 2: 4^N times the faces) and write OUT (.obj .off
+//       .ply, full precision); e.g. fertility.off -> the 144,000-face "fertility x16".
 // Without MESH it uses ../shared/meshes/fandisk.obj and fertility.off subdivided to 144k faces.
 // With --repeat N every build runs N times (floor and fields alternating) and each row shows the
 // run with the median total time.
@@ -13,6 +20,8 @@
 // own peak (~ tens of MB): small values at 128/256 are that floor. Prints Markdown.
 #include <sys/wait.h>
 #include <unistd.h>
+
+#include <tbb/global_control.h>
 
 #include <algorithm>
 #include <array>
@@ -24,6 +33,7 @@
 #include <filesystem>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <random>
 #include <string>
 #include <utility>
@@ -32,6 +42,7 @@
 #include "assets/shapes.h"
 #include "core/errors.h"
 #include "core/validate.h"
+#include "core/writers.h"
 #include "vdb_ops/fields.h"
 
 namespace vdb_shell {
@@ -238,6 +249,71 @@ void sphere_accuracy(SdfMethod method, int res) {
             << sum / double(n) << " |" << std::endl;
 }
 
+
+/// JSON string literal (paths only: escapes quotes, backslashes and control characters).
+std::string json_string(const std::string& s) {
+  std::string out = "\"";
+  for (const char c : s) {
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (static_cast<unsigned char>(c) < 0x20) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\u%04x", c);
+      out += buf;
+    } else {
+      out += c;
+    }
+  }
+  return out + "\"";
+}
+
+/// --floor: one narrow-band meshToLevelSet of `path` at `res`, in this process.
+int floor_only(const std::string& path, int res, int threads, bool json) {
+  std::unique_ptr<tbb::global_control> limit;
+  if (threads > 0)
+    limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                  static_cast<std::size_t>(threads));
+  const auto t0 = std::chrono::steady_clock::now();
+  const SurfaceMesh mesh = load_surface(path).mesh;
+  const double load_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
+                            .count();
+  FieldOptions options;
+  options.resolution = res;
+  options.max_memory_gb = 64.0;
+  const FieldStats st = build_narrow_band_reference(mesh, options);
+  char line[4096];
+  if (json) {
+    std::snprintf(line, sizeof line,
+                  "{\"mesh\": %s, \"faces\": %zu, \"resolution\": %d, \"threads\": %d, "
+                  "\"strategy\": %s, \"voxel_size\": %.17g, \"load_s\": %.6f, \"floor_s\": %.6f, "
+                  "\"active_voxels\": %zu, \"grid_mb\": %.3f, \"peak_rss_mb\": %.3f}",
+                  json_string(path).c_str(), mesh.num_faces(), res, threads,
+                  json_string(st.strategy).c_str(), st.voxel_size, load_s, st.seconds_total,
+                  st.sdf_active_voxels, double(st.grid_bytes) / (1024.0 * 1024.0), peak_mb_now());
+  } else {
+    std::snprintf(line, sizeof line, "| %s | %zu | %d | %.3f | %zu | %.1f | %.0f |", path.c_str(),
+                  mesh.num_faces(), res, st.seconds_total, st.sdf_active_voxels,
+                  double(st.grid_bytes) / (1024.0 * 1024.0), peak_mb_now());
+    std::cout << "| mesh | faces | res | floor s | active voxels | grid MB | peak RSS MB |\n"
+              << "|---|---|---|---|---|---|---|\n";
+  }
+  std::cout << line << std::endl;
+  return 0;
+}
+
+/// --write-subdivided: `levels` midpoint subdivisions of `in`, written to `out`.
+int write_subdivided(const std::string& in, const std::string& out, int levels) {
+  SurfaceMesh mesh = load_surface(in).mesh;
+  const std::size_t before = mesh.num_faces();
+  for (int l = 0; l < levels; ++l) mesh = subdivide(mesh);
+  write_surface(out, mesh);
+  std::cout << in << " (" << before << " faces) subdivided " << levels << "x: "
+            << mesh.num_vertices() << " vertices, " << mesh.num_faces() << " faces -> " << out
+            << std::endl;
+  return 0;
+}
+
 }  // namespace
 }  // namespace vdb_shell
 
@@ -248,9 +324,25 @@ int main(int argc, char** argv) {
   bool sweeping = true;
   bool queries = true;
   std::vector<std::string> paths;
+  std::string floor_mesh, subdivide_in, subdivide_out;
+  int resolution = 128, threads = 0, levels = 2;
+  bool json = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--max-resolution" && i + 1 < argc) {
+    if (a == "--floor" && i + 1 < argc) {
+      floor_mesh = argv[++i];
+    } else if (a == "--resolution" && i + 1 < argc) {
+      resolution = std::atoi(argv[++i]);
+    } else if ((a == "--threads" || a == "-j") && i + 1 < argc) {
+      threads = std::max(0, std::atoi(argv[++i]));
+    } else if (a == "--json") {
+      json = true;
+    } else if (a == "--write-subdivided" && i + 2 < argc) {
+      subdivide_in = argv[++i];
+      subdivide_out = argv[++i];
+    } else if (a == "--levels" && i + 1 < argc) {
+      levels = std::max(0, std::atoi(argv[++i]));
+    } else if (a == "--max-resolution" && i + 1 < argc) {
       max_res = std::atoi(argv[++i]);
     } else if (a == "--repeat" && i + 1 < argc) {
       repeat = std::max(1, std::atoi(argv[++i]));
@@ -260,6 +352,18 @@ int main(int argc, char** argv) {
       queries = false;
     } else {
       paths.push_back(a);
+    }
+  }
+  if (!floor_mesh.empty() || !subdivide_in.empty()) {
+    try {
+      return !floor_mesh.empty() ? floor_only(floor_mesh, resolution, threads, json)
+                                 : write_subdivided(subdivide_in, subdivide_out, levels);
+    } catch (const InputError& e) {
+      std::cerr << "fields_bench: " << e.what() << "\n";
+      return 2;
+    } catch (const std::exception& e) {
+      std::cerr << "fields_bench: " << e.what() << "\n";
+      return 3;
     }
   }
   std::vector<std::pair<std::string, SurfaceMesh>> meshes;
