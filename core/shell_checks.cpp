@@ -914,8 +914,7 @@ struct ShellChecker::Impl {
     }
     for (const std::uint32_t c : p.cells[k]) {
       std::vector<std::uint32_t>& list = cell_keys[c];
-      *std::find(list.begin(), list.end(), key) = list.back();
-      list.pop_back();
+      list.erase(std::lower_bound(list.begin(), list.end(), key));
     }
     p.cells[k].clear();
   }
@@ -926,14 +925,18 @@ struct ShellChecker::Impl {
     if (p.stray[k]) {
       stray_keys.push_back(key);
     } else {
-      for (const std::uint32_t c : p.cells[k]) cell_keys[c].push_back(key);
+      for (const std::uint32_t c : p.cells[k]) {  // the lists stay sorted
+        std::vector<std::uint32_t>& list = cell_keys[c];
+        list.insert(std::lower_bound(list.begin(), list.end(), key), key);
+      }
     }
   }
 
   // Calls visit(other) once for every tet key that may touch tet `key` (the stray tets
-  // included), using `mark` (one entry per key, never equal to stamp before) to skip repeats.
+  // included), using `mark` (one entry per key, never equal to stamp before) to skip repeats;
+  // with `only_greater`, the cells' keys below `key` are skipped.
   template <class Visit>
-  void for_each_candidate(std::uint32_t key, std::vector<std::uint32_t>& mark,
+  void for_each_candidate(std::uint32_t key, bool only_greater, std::vector<std::uint32_t>& mark,
                           std::uint32_t stamp, const Visit& visit) const {
     const Prism& p = prisms[key / 3];
     const int k = static_cast<int>(key % 3);
@@ -947,8 +950,12 @@ struct ShellChecker::Impl {
         for (int j = 0; j < prisms[f].count; ++j) once(3 * f + static_cast<std::uint32_t>(j));
       return;
     }
-    for (const std::uint32_t c : p.cells[k])
-      for (const std::uint32_t other : cell_keys[c]) once(other);
+    for (const std::uint32_t c : p.cells[k]) {
+      const std::vector<std::uint32_t>& list = cell_keys[c];
+      for (auto it = only_greater ? std::upper_bound(list.begin(), list.end(), key) : list.begin();
+           it != list.end(); ++it)
+        once(*it);
+    }
     for (const std::uint32_t other : stray_keys) once(other);
   }
 
@@ -1103,6 +1110,7 @@ ShellCheckResult ShellChecker::check(const TetMesh& mesh) {
   std::vector<std::uint8_t> is_dirty(n_faces, 0);
   for (const std::uint32_t f : dirty) is_dirty[f] = 1;
   std::vector<Found> found(dirty.size());
+  const bool all_dirty = dirty.size() == n_faces;  // every pair from its smaller key
   for_each_chunk(
       dirty.size(),
       [&](std::size_t begin, std::size_t end) {
@@ -1116,7 +1124,7 @@ ShellCheckResult ShellChecker::check(const TetMesh& mesh) {
             const TetGeometry& a = p.geo[static_cast<std::size_t>(k)];
             const std::uint32_t ta = first[f] + static_cast<std::uint32_t>(k);
             if (options.check_overlaps) {
-              m.for_each_candidate(key, tet_mark, key + 1, [&](std::uint32_t other) {
+              m.for_each_candidate(key, all_dirty, tet_mark, key + 1, [&](std::uint32_t other) {
                 const std::uint32_t g = other / 3;
                 if (other == key || (is_dirty[g] && other < key)) return;
                 if (!boxes_overlap(a.box, m.key_box[other])) return;
