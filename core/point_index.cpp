@@ -24,7 +24,8 @@ class HashPointIndex final : public PointIndex {
       : points_(points), cell_(radius > 0 ? radius : 1.0) {
     for (std::uint32_t n = 0; n < points_.size(); ++n) cells_[key(points_[n])].push_back(n);
   }
-  void find_within(const Vec3d& p, double radius, std::vector<std::uint32_t>& out) const override {
+  void find_within_unordered(const Vec3d& p, double radius,
+                             std::vector<std::uint32_t>& out) const override {
     out.clear();
     const CellKey lo = key(p - Vec3d(radius, radius, radius));
     const CellKey hi = key(p + Vec3d(radius, radius, radius));
@@ -37,7 +38,6 @@ class HashPointIndex final : public PointIndex {
           for (std::uint32_t n : it->second)
             if (norm2(points_[n] - p) <= r2) out.push_back(n);
         }
-    std::sort(out.begin(), out.end());
   }
 
  private:

@@ -5,6 +5,7 @@
 // indices for the same query.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -18,10 +19,15 @@ namespace vdb_shell {
 class PointIndex {
  public:
   virtual ~PointIndex() = default;
-  /// Replaces `out` with the indices of the points within `radius` (world units) of `p`,
-  /// sorted ascending.
-  virtual void find_within(const Vec3d& p, double radius,
-                           std::vector<std::uint32_t>& out) const = 0;
+  /// Replaces `out` with the indices of the points within `radius` (world units) of `p`, in no
+  /// particular order (for callers that filter the result and order what is left themselves).
+  virtual void find_within_unordered(const Vec3d& p, double radius,
+                                     std::vector<std::uint32_t>& out) const = 0;
+  /// The same, sorted ascending.
+  void find_within(const Vec3d& p, double radius, std::vector<std::uint32_t>& out) const {
+    find_within_unordered(p, radius, out);
+    std::sort(out.begin(), out.end());
+  }
 };
 
 /// Builds an index over `points`; `radius` is the query radius the caller will use (a hint for

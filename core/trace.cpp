@@ -126,6 +126,8 @@ struct Chunk {
   double radius = 0;                  ///< world units: every sample lies within it of `centre`
   Vec3d axis;                         ///< unit; zero when the directions bound nothing
   double spread = kPi;                ///< radians: every sample direction within it of `axis`
+  double cos_spread = -1, sin_spread = 0;
+  Vec3d start;                        ///< sample 0 of `trace` (kept here for cache locality)
 };
 
 /// Bounding sphere and direction cone of samples [first, last] of trace v; `dirs` receives
@@ -137,6 +139,7 @@ Chunk make_chunk(const TraceResult& r, std::uint32_t v, std::uint32_t first, std
   c.first = first;
   c.last = last;
   c.centre = (r.sample(v, first) + r.sample(v, last)) * 0.5;
+  c.start = r.sample(v, 0);
   Vec3d sum;
   bool all_directed = true;
   dirs.clear();
@@ -155,13 +158,19 @@ Chunk make_chunk(const TraceResult& r, std::uint32_t v, std::uint32_t first, std
   for (const Vec3d& d : dirs)
     spread = std::max(spread, std::acos(std::clamp(dot(d, c.axis), -1.0, 1.0)));
   c.spread = spread + kAngleMargin;
+  c.cos_spread = std::cos(c.spread);
+  c.sin_spread = std::sin(c.spread);
   return c;
 }
 
-/// Angle between the cone axes of two chunks, or pi when either has none.
-double axis_angle(const Chunk& a, const Chunk& b) {
-  if (norm2(a.axis) == 0.0 || norm2(b.axis) == 0.0) return kPi;
-  return std::acos(std::clamp(dot(a.axis, b.axis), -1.0, 1.0));
+/// Whether every direction of chunk `b` lies within the merge angle of every direction of the
+/// run whose axis is `axis` and whose spread leaves `budget` = merge angle - margin - run spread:
+/// angle(axes) + b.spread < budget, tested as a cosine (no acos per pair).
+bool same_way(const Vec3d& axis, double cos_budget, double sin_budget, double budget,
+              const Chunk& b) {
+  if (norm2(axis) == 0.0 || norm2(b.axis) == 0.0 || !(b.spread < budget)) return false;
+  // cos(budget - b.spread), the largest angle between the axes that still counts.
+  return dot(axis, b.axis) > cos_budget * b.cos_spread + sin_budget * b.sin_spread;
 }
 
 /// Ends every trace of `which` at its first merge with a sample of `indexed` traces
@@ -221,20 +230,21 @@ void resolve_merges(TraceResult& r, const std::vector<std::uint32_t>& which,
       for (std::uint32_t first = 0; first <= r.end[j] && partner[w] < 0; first += kChunkSamples) {
         const std::uint32_t last = std::min(first + kChunkSamples - 1, r.end[j]);
         const Chunk run = make_chunk(r, j, first, last, dirs);
-        index->find_within(run.centre, run.radius + ps + max_radius + margin, found);
+        index->find_within_unordered(run.centre, run.radius + ps + max_radius + margin, found);
         near.clear();
+        const double budget = merge_angle - kAngleMargin - run.spread;
+        const double cos_budget = std::cos(budget), sin_budget = std::sin(budget);
         for (std::uint32_t c : found) {
           const Chunk& other = chunks[c];
-          const std::uint32_t k = other.trace;
-          if (k == j || distance(pj, r.sample(k, 0)) < ps) continue;  // side by side from start
           if (distance(run.centre, other.centre) > run.radius + ps + other.radius + margin)
             continue;
           // Every pair of directions closer than the merge angle: running the same way.
-          if (axis_angle(run, other) + run.spread + other.spread < merge_angle - kAngleMargin)
-            continue;
+          if (same_way(run.axis, cos_budget, sin_budget, budget, other)) continue;
+          if (other.trace == j || distance(pj, other.start) < ps) continue;  // side by side
           near.push_back(c);
         }
         if (near.empty()) continue;
+        std::sort(near.begin(), near.end());  // ascending (trace, sample): ties below
         for (std::uint32_t i = first; i <= last; ++i) {
           const Vec3d& q = r.sample(j, i);
           const Vec3d& dj = dirs[i - first];

@@ -46,7 +46,8 @@ class VdbPointIndex final : public PointIndex {
                                                                                 *transform_);
   }
 
-  void find_within(const Vec3d& p, double radius, std::vector<std::uint32_t>& out) const override {
+  void find_within_unordered(const Vec3d& p, double radius,
+                             std::vector<std::uint32_t>& out) const override {
     out.clear();
     if (points_.empty() || !(radius >= 0.0)) return;
     using Iterator = openvdb::tools::PointIndexIterator<openvdb::tools::PointIndexTree>;
@@ -59,7 +60,6 @@ class VdbPointIndex final : public PointIndex {
       const std::uint32_t n = *it;
       if (norm2(points_[n] - p) <= r2) out.push_back(n);
     }
-    std::sort(out.begin(), out.end());
   }
 
  private:

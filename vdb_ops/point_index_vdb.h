@@ -3,9 +3,10 @@
 //
 // Implements core's PointIndex (core/point_index.h); no OpenVDB header is included here. The
 // points are bucketed into a PointIndexGrid with cubic voxels of edge `radius` (world units);
-// find_within() runs a radial tools::PointIndexIterator search with a slightly larger radius and
-// keeps the points with |point - p|^2 <= radius^2, evaluated in double precision in world space,
-// sorted ascending: exactly the indices make_hash_point_index() returns for the same query.
+// find_within_unordered() runs a radial tools::PointIndexIterator search with a slightly larger
+// radius and keeps the points with |point - p|^2 <= radius^2, evaluated in double precision in
+// world space: after sorting (find_within()), exactly the indices make_hash_point_index()
+// returns for the same query.
 //
 // Space: positions and radii are world coordinates and world units (the input mesh's frame).
 // Threads: const queries may run concurrently; each builds its own ValueAccessor and iterator.
