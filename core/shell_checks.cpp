@@ -742,10 +742,10 @@ void count_volumes(const TetMesh& mesh, const ShellCheckOptions& options,
 }
 
 // The checks every call makes in full: mesh sanity (throws), T <= 3F, volumes, surface points
-// kept, boundary faces. Returns the indices of the inner points.
+// kept, and (with `faces`) boundary faces. Returns the indices of the inner points.
 std::vector<std::uint32_t> check_basics(const SurfaceMesh& surface, const TetMesh& mesh,
                                         const ShellCheckOptions& options,
-                                        ShellCheckResult& result) {
+                                        ShellCheckResult& result, bool faces = true) {
   const std::size_t n_points = mesh.points.size();
   for (std::size_t t = 0; t < mesh.tets.size(); ++t)
     for (const std::uint32_t v : mesh.tets[t])
@@ -777,7 +777,7 @@ std::vector<std::uint32_t> check_basics(const SurfaceMesh& surface, const TetMes
     }
   }
 
-  check_faces(surface, mesh, options, result);
+  if (faces) check_faces(surface, mesh, options, result);
 
   std::vector<std::uint32_t> inner_points;
   for (std::size_t v = 0; v < n_points; ++v)
@@ -874,6 +874,9 @@ struct ShellChecker::Impl {
   std::vector<BBox> key_box;           // per tet key: its box (compact, for the broad phase)
   std::vector<std::uint8_t> offended;  // per prism, in the previous call
   std::map<std::array<double, 3>, bool> outside_cache;
+  // Boundary faces depend on the tets' vertex indices only: the last result and its tets.
+  std::vector<Tet> faces_tets;
+  ShellCheckResult faces_result;
 
   void build_grid(const std::vector<TetGeometry>& geo) {
     BBox box = bounding_box(surface);
@@ -989,7 +992,21 @@ ShellCheckResult ShellChecker::check(const TetMesh& mesh) {
   const ShellCheckOptions& options = m.options;
   const auto start = std::chrono::steady_clock::now();
   ShellCheckResult result;
-  const std::vector<std::uint32_t> inner_points = check_basics(m.surface, mesh, options, result);
+  const std::vector<std::uint32_t> inner_points =
+      check_basics(m.surface, mesh, options, result, /*faces=*/false);
+  if (mesh.tets != m.faces_tets) {
+    m.faces_result = ShellCheckResult{};
+    check_faces(m.surface, mesh, options, m.faces_result);
+    m.faces_tets = mesh.tets;
+  }
+  const ShellCheckResult& f = m.faces_result;
+  result.missing_triangles = f.missing_triangles;
+  result.first_missing_triangles = f.first_missing_triangles;
+  result.shared_triangles = f.shared_triangles;
+  result.first_shared_triangles = f.first_shared_triangles;
+  result.misoriented_triangles = f.misoriented_triangles;
+  result.first_misoriented_triangles = f.first_misoriented_triangles;
+  result.nonmanifold_faces = f.nonmanifold_faces;
 
   // Inner points inside, each position tested once over all calls.
   {

@@ -119,9 +119,9 @@ ShellCheckResult check_volumes(const TetMesh& mesh, const ShellCheckOptions& opt
 /// prisms — the search of make_valid_shell() — at a cost that follows the prisms that changed.
 ///
 /// Every mesh must be an assemble_shell() result (assemble.h): tets grouped by
-/// TetMesh::source_triangle in triangle order, at most 3 per triangle. Volumes, surface points,
-/// boundary faces and inner points are checked in full on every call (inner points once per
-/// distinct position). The overlap and leak tests only test the tets of "dirty" prisms — whose
+/// TetMesh::source_triangle in triangle order, at most 3 per triangle. Volumes and surface
+/// points are checked in full on every call, boundary faces whenever the tets' vertex indices
+/// changed (they depend on nothing else), inner points once per distinct position. The overlap and leak tests only test the tets of "dirty" prisms — whose
 /// tets moved since the previous call, or that offended in it — against all others, and trust
 /// every other pair: both its tets are where they were when the pair last passed. The listed
 /// offenders therefore always involve a dirty prism, and valid() is check_shell()'s verdict.
