@@ -315,12 +315,18 @@ TEST(ShellChecks, TooManyTets) {
   EXPECT_TRUE(check_shell(s, m, options).too_many_tets);
 }
 
-TEST(ShellChecks, SameResultForAnyThreadCount) {
-  const SurfaceMesh s = make_shape("sphere", 2);
+/// The sphere shell scaled by 0.5, broken in several places: shuffled inner vertices invert and
+/// overlap prisms.
+TetMesh broken_sphere_shell(const SurfaceMesh& s) {
   TetMesh m = scaled_shell(s, 0.5);
-  // Break it in several places: shuffled inner vertices invert and overlap prisms.
   const std::size_t n = s.points.size();
   for (std::size_t v = 0; v < n; v += 97) m.points[n + v] = m.points[n + (v * 7 + 13) % n];
+  return m;
+}
+
+TEST(ShellChecks, SameResultForAnyThreadCount) {
+  const SurfaceMesh s = make_shape("sphere", 2);
+  const TetMesh m = broken_sphere_shell(s);
   ShellCheckOptions options;
   options.max_listed = std::numeric_limits<std::size_t>::max();
   ShellCheckResult serial;
@@ -401,9 +407,7 @@ TEST(ShellChecker, AgreesWithCheckShellAlongASequenceOfMoves) {
 
 TEST(ShellChecker, VolumesOnlyCheckFindsTheInvertedTets) {
   const SurfaceMesh s = make_shape("sphere", 2);
-  TetMesh m = scaled_shell(s, 0.5);
-  const std::size_t n = s.points.size();
-  for (std::size_t v = 0; v < n; v += 97) m.points[n + v] = m.points[n + (v * 7 + 13) % n];
+  const TetMesh m = broken_sphere_shell(s);
   ShellCheckOptions options;
   options.max_listed = std::numeric_limits<std::size_t>::max();
   const ShellCheckResult volumes = check_volumes(m, options);
