@@ -217,8 +217,6 @@ struct VdbGridInfo {
   std::uint64_t checksum = 0;  ///< FNV-1a over (coord, value bits) of every active voxel
 };
 
-/// Reads every grid of `path` with the OpenVDB API.
-/// \throw InputError if the file is missing or not a .vdb file.
 /// The zero crossing of the level set `grid_name` of `vdb_path` (empty: 'surface', else the
 /// first float level set) as polygons (OpenVDB volumeToMesh; quads and triangles, outward),
 /// world units. `adaptivity` in [0, 1]: 0 keeps every voxel-sized quad, larger values merge
@@ -227,6 +225,8 @@ struct VdbGridInfo {
 PolygonSoup level_set_to_soup(const std::string& vdb_path, const std::string& grid_name,
                               double adaptivity);
 
+/// Reads every grid of `path` with the OpenVDB API.
+/// \throw InputError if the file is missing or not a .vdb file.
 std::vector<VdbGridInfo> read_vdb_grid_infos(const std::string& path);
 
 /// The same description of the in-memory grids of `fields` (as write_grids() would name them,
