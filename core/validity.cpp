@@ -250,47 +250,6 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
     }
   }
 
-  // Refinement: move moved-back vertices one level deeper where that stays valid.
-  if (out.checks.valid()) {
-    for (int pass = 0; pass < options.refine_passes; ++pass) {
-      State trial = s;
-      std::vector<std::uint32_t> raised;
-      for (std::uint32_t v = 0; v < n; ++v)
-        if (!s.welded[v] && s.t[v] < search.full()[v]) {
-          trial.t[v] = std::min(search.full()[v], s.t[v] / std::sqrt(options.shrink));
-          raised.push_back(v);
-        }
-      if (raised.empty()) break;
-      // Undo the raises that offend until the trial is valid (bounded: each undo is final).
-      for (int round = 0; round < options.max_rounds; ++round) {
-        ShellInput in = search.build(trial, members);
-        AssembleResult shell = assemble_shell(surface, in, no_quality);
-        ShellCheckResult c = check(shell.mesh);
-        if (c.valid()) {
-          s = trial;
-          out.input = std::move(in);
-          out.shell = std::move(shell);
-          out.checks = std::move(c);
-          break;
-        }
-        collect_offenders(surface, in, c, bad_tets, bad_slots);
-        bool undone = false;
-        auto undo = [&](std::uint32_t slot) {
-          for (std::uint32_t v : members[slot])
-            if (trial.t[v] != s.t[v]) {
-              trial.t[v] = s.t[v];
-              undone = true;
-            }
-        };
-        for (std::uint32_t t : bad_tets)
-          for (std::uint32_t p : shell.mesh.tets[t])
-            if (p >= n) undo(p - n);
-        for (std::uint32_t slot : bad_slots) undo(slot);
-        if (!undone) break;
-      }
-    }
-  }
-
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   // The incremental checks trusted unchanged tets; the result carries one full check (the

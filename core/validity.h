@@ -21,9 +21,8 @@
 // loop ends with no offending element. Should a round find only floor elements offending, the
 // floor configuration is checked and the run fails, naming what it broke.
 // Vertices that were never involved keep their full depth: the shell stays as thick as the
-// traces allow wherever it is already valid. Optional refinement passes then try to move each
-// moved-back vertex deeper again (by 1/sqrt(shrink)), keeping every move that stays valid; with
-// the default gentle shrink they buy little (docs/validity.md) and are off.
+// traces allow wherever it is already valid; the gentle shrink takes little more than needed
+// from those that were (docs/validity.md compares it with a harder shrink plus refinement).
 //
 // Cost: one ShellChecker (shell_checks.h) serves every round, testing only the prisms that
 // moved since the previous round (or still offend); the result gets one full check_shell().
@@ -43,7 +42,6 @@ struct ValidityOptions {
   double shrink = 0.85;         ///< factor applied to t_v of a moved-back vertex, in (0, 1)
   double floor_fraction = 0.02; ///< t_min_v = this * shortest incident edge (capped at full)
   int max_rounds = 1000;        ///< safety net (rounds are cheap: most check volumes only)
-  int refine_passes = 0;        ///< passes moving moved-back vertices deeper again (0: none)
 };
 
 struct ValidShell {
