@@ -15,6 +15,7 @@
 #include <iostream>
 #include <memory>
 #include <new>
+#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -339,6 +340,19 @@ RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& 
   const ShellCheckResult& checks = valid.checks;
   const QualitySummary quality = summarize_quality(mesh, shell.mesh);
   const double t_assemble = t_inner + progress.stop();
+  if (!checks.valid() && !valid.folded_vertices.empty()) {
+    const std::uint32_t v = valid.folded_vertices.front();
+    const Vec3d& p = mesh.points[v];
+    std::ostringstream message;
+    const std::size_t n = valid.folded_vertices.size();
+    message << opt.input << ": " << n << (n == 1 ? " surface vertex is" : " surface vertices are")
+            << " folded: the incident faces have no common inward direction (first: vertex " << v
+            << " at (" << p.x << ", " << p.y << ", " << p.z
+            << ")), so no thin shell of prisms is valid there and the search found no thicker "
+               "one; remesh the surface around it (for a .vdb input, a lower --adaptivity); "
+               "nothing was written";
+    throw InputError(message.str());
+  }
   if (!checks.valid()) {
     std::string message = opt.input + ": could not make the shell valid after " +
                           std::to_string(valid.rounds) + " rounds (" + describe_problems(checks) +

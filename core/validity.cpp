@@ -88,8 +88,13 @@ class ShellSearch {
       if (margin >= kMinMargin) continue;
       const Vec3d safe = most_inward_direction(face_normals[v], -normalized(normal[v]));
       if (inward_margin(face_normals[v], safe) > margin) correction_[v] = safe - first;
+      if (std::max(margin, inward_margin(face_normals[v], safe)) <= 0.0)
+        folded_.push_back(static_cast<std::uint32_t>(v));
     }
   }
+
+  /// Vertices whose incident faces admit no common inward direction (none found).
+  const std::vector<std::uint32_t>& folded() const { return folded_; }
 
   const std::vector<double>& full() const { return full_; }
   const std::vector<double>& floor() const { return floor_; }
@@ -146,6 +151,7 @@ class ShellSearch {
   std::vector<double> full_, floor_;
   std::vector<Vec3d> fallback_, correction_;
   std::vector<std::uint32_t> group_size_;
+  std::vector<std::uint32_t> folded_;
 };
 
 /// Offending tets and inner slots of a check.
@@ -246,6 +252,7 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
       const ShellCheckResult c = check_shell(surface, assemble_shell(surface, in, no_quality).mesh);
       out.floor_valid = c.valid();
       if (!out.floor_valid) out.floor_problems = describe_problems(c);
+      out.folded_vertices = search.folded();
       break;
     }
   }

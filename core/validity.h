@@ -56,6 +56,11 @@ struct ValidShell {
   std::size_t unwelded = 0;       ///< vertices that left their weld
   bool floor_valid = true;        ///< false: the search stalled and the floor failed too
   std::string floor_problems;     ///< what the floor configuration broke, when it did
+  /// When the search stalled: surface vertices whose incident faces admit no common inward
+  /// direction (their face normals fit in no open hemisphere). Every prism constrains each of its
+  /// corners' inner directions against its face normal, so no thin shell is valid at such a
+  /// vertex: the input needs remeshing there.
+  std::vector<std::uint32_t> folded_vertices;
   double seconds = 0;             ///< the search, without the final full check (checks.seconds)
 };
 

@@ -208,6 +208,24 @@ TEST(Pipeline, VdbInputRoundTrip) {
             2);
 }
 
+TEST(Pipeline, FoldedVertexIsBadInputWithNothingWritten) {
+  // fandisk's level set meshed adaptively (10,188 faces, closed, no self-intersection) has one
+  // vertex whose incident faces admit no common inward direction: a clear exit 2 naming it.
+  const auto meshes = test::shared_meshes_dir();
+  if (meshes.empty()) GTEST_SKIP() << "../shared/meshes is absent";
+  TempDir dir;
+  const auto g = run_command(test::vdb_shell_bin() + " '" + (meshes / "fandisk.obj").string() +
+                             "' -q --resolution 128 --grids '" + dir.file("f.vdb") + "'");
+  ASSERT_EQ(g.exit_code, 0) << g.err;
+  const auto r = run_command(test::vdb_shell_bin() + " '" + dir.file("f.vdb") + "' -o '" +
+                             dir.file("f.vtu") + "' -q --adaptivity 0.3");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("folded"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("(first: vertex "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--adaptivity"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("f.vtu")));
+}
+
 TEST(Pipeline, BadOptionsExit2AndWriteNothing) {
   TempDir dir;
   const std::string in = shape_file(dir, "box");
