@@ -442,10 +442,9 @@ BBox bounding_box_of(const std::vector<TetGeometry>& geo) {
 }
 
 // Cell size: about the edge of a cube of the mean tet volume, so that slivers enter few cells,
-// made larger until `box` has at most `cells_per_tet` cells per tet and the tets' boxes span at
-// most 64 cells each on average.
-double grid_cell_size(const std::vector<TetGeometry>& geo, const BBox& all,
-                      double cells_per_tet) {
+// made larger until `all` has at most 32 cells per tet and the tets' boxes span at most 64 cells
+// each on average.
+double grid_cell_size(const std::vector<TetGeometry>& geo, const BBox& all) {
   const double n = static_cast<double>(geo.size());
   double mean_volume = 0.0, mean_side = 0.0;
   for (const TetGeometry& g : geo) {
@@ -465,7 +464,7 @@ double grid_cell_size(const std::vector<TetGeometry>& geo, const BBox& all,
       spanned += (std::floor(e.x / h) + 2.0) * (std::floor(e.y / h) + 2.0) *
                  (std::floor(e.z / h) + 2.0);
     }
-    if (cells <= cells_per_tet * n + 64.0 && spanned <= 64.0 * n) break;
+    if (cells <= 32.0 * n + 64.0 && spanned <= 64.0 * n) break;
     h *= 1.25;
   }
   return h;
@@ -477,12 +476,16 @@ bool tets_intersect(const TetGeometry& a, const TetGeometry& b, const ShellCheck
   return geometries_overlap(a, b, options.overlap_tolerance * std::max(a.max_edge, b.max_edge));
 }
 
+// The corners of surface triangle f.
+std::array<Vec3d, 3> corners(const SurfaceMesh& surface, std::size_t f) {
+  const Triangle& tri = surface.triangles[f];
+  return {surface.points[tri[0]], surface.points[tri[1]], surface.points[tri[2]]};
+}
+
 // Whether surface triangle f crosses the interior of tet g (touching does not count).
 bool surface_triangle_crosses(const SurfaceMesh& surface, std::size_t f, const TetGeometry& g,
                               const ShellCheckOptions& options) {
-  const Triangle& tri = surface.triangles[f];
-  const std::array<Vec3d, 3> t = {surface.points[tri[0]], surface.points[tri[1]],
-                                  surface.points[tri[2]]};
+  const std::array<Vec3d, 3> t = corners(surface, f);
   BBox box;
   for (const Vec3d& p : t) box.expand(p);
   return boxes_overlap(box, g.box) &&
@@ -514,7 +517,7 @@ void check_tet_intersections(const SurfaceMesh& surface, const TetMesh& mesh,
 
   // Broad phase: tet -> cells, then cell -> tets (tets in increasing order in every cell).
   const BBox grid_box = bounding_box_of(geo);
-  const TetGrid grid(grid_box, grid_cell_size(geo, grid_box, 32.0));
+  const TetGrid grid(grid_box, grid_cell_size(geo, grid_box));
   std::vector<std::uint64_t> tet_start(n + 1, 0);
   for_each_index(n, [&](std::size_t t) { tet_start[t + 1] = grid.cells_of(geo[t], nullptr); });
   for (std::size_t t = 0; t < n; ++t) tet_start[t + 1] += tet_start[t];
@@ -580,9 +583,7 @@ void check_tet_intersections(const SurfaceMesh& surface, const TetMesh& mesh,
         std::vector<std::uint32_t> mark(n, 0);
         std::vector<std::uint32_t> cells;
         for (std::size_t f = begin; f != end; ++f) {
-          const Triangle& tri = surface.triangles[f];
-          const std::array<Vec3d, 3> t = {surface.points[tri[0]], surface.points[tri[1]],
-                                          surface.points[tri[2]]};
+          const std::array<Vec3d, 3> t = corners(surface, f);
           BBox box;
           for (const Vec3d& p : t) box.expand(p);
           if (!boxes_overlap(box, grid_box)) continue;
@@ -886,14 +887,12 @@ struct ShellChecker::Impl {
     const double margin = 0.05 * box.diagonal();
     box.expand(box.lo - Vec3d{margin, margin, margin});
     box.expand(box.hi + Vec3d{margin, margin, margin});
-    grid = std::make_unique<TetGrid>(box, grid_cell_size(geo, box, 32.0));
+    grid = std::make_unique<TetGrid>(box, grid_cell_size(geo, box));
     cell_keys.assign(grid->num_cells(), {});
     const std::size_t n_faces = surface.triangles.size();
     std::vector<std::vector<std::uint32_t>> cells(n_faces);
     for_each_index(n_faces, [&](std::size_t f) {
-      const Triangle& tri = surface.triangles[f];
-      const std::array<Vec3d, 3> t = {surface.points[tri[0]], surface.points[tri[1]],
-                                      surface.points[tri[2]]};
+      const std::array<Vec3d, 3> t = corners(surface, f);
       cells[f].resize(grid->cells_of_triangle(t, nullptr));
       grid->cells_of_triangle(t, cells[f].data());
     });
