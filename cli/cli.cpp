@@ -348,9 +348,9 @@ RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& 
     message << opt.input << ": " << n << (n == 1 ? " surface vertex is" : " surface vertices are")
             << " folded: the incident faces have no common inward direction (first: vertex " << v
             << " at (" << p.x << ", " << p.y << ", " << p.z
-            << ")), so no thin shell of prisms is valid there and the search found no thicker "
-               "one; remesh the surface around it (for a .vdb input, a lower --adaptivity); "
-               "nothing was written";
+            << ")); keeping them on the surface did not make the shell valid (a face with three "
+               "folded corners, or a fold sharper than the thinnest shell); remesh the surface "
+               "around them (for a .vdb input, a lower --adaptivity); nothing was written";
     throw InputError(message.str());
   }
   if (!checks.valid()) {
@@ -370,11 +370,17 @@ RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& 
   if (!opt.grids.empty()) write_grids(opt.grids, *fields, fields->parameters(), &traces);
   if (!opt.paths.empty()) write_paths_vtk(opt.paths, traces);
   if (!opt.inner.empty()) {
+    // The inner side as a surface; a vertex kept on the surface is its own inner vertex.
     SurfaceMesh inner_surface;
     inner_surface.points = valid.input.inner_points;
+    std::vector<std::uint32_t> id = valid.input.inner_id;
+    for (std::uint32_t v = 0; v < id.size(); ++v)
+      if (id[v] == kOnSurface) {
+        id[v] = static_cast<std::uint32_t>(inner_surface.points.size());
+        inner_surface.points.push_back(mesh.points[v]);
+      }
     for (const Triangle& t : mesh.triangles)
-      inner_surface.triangles.push_back(
-          {valid.input.inner_id[t[0]], valid.input.inner_id[t[2]], valid.input.inner_id[t[1]]});
+      inner_surface.triangles.push_back({id[t[0]], id[t[2]], id[t[1]]});
     write_surface(opt.inner, inner_surface);
   }
   const double t_write = progress.stop();
@@ -422,6 +428,7 @@ RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& 
                    {"moved_back_vertices", valid.moved_back},
                    {"moved_back_mean_fraction", valid.moved_back_mean},
                    {"unwelded_vertices", valid.unwelded},
+                   {"on_surface_vertices", valid.on_surface.size()},
                    {"floor_valid", valid.floor_valid},
                    {"seconds", valid.seconds}};
   j["quality"] = {{"min", quality.min_quality},

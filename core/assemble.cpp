@@ -99,7 +99,7 @@ AssembleResult assemble_shell(const SurfaceMesh& surface, const ShellInput& inpu
     throw InputError("assemble_shell: " + std::to_string(n_surface + n_inner) +
                      " points do not fit 32-bit indices");
   for (std::size_t v = 0; v < n_surface; ++v)
-    if (input.inner_id[v] >= n_inner)
+    if (input.inner_id[v] >= n_inner && input.inner_id[v] != kOnSurface)
       throw InputError("assemble_shell: surface vertex " + std::to_string(v) +
                        " refers to inner vertex " + std::to_string(input.inner_id[v]) +
                        ", but there are only " + std::to_string(n_inner) + " inner points");
@@ -122,12 +122,16 @@ AssembleResult assemble_shell(const SurfaceMesh& surface, const ShellInput& inpu
   std::vector<std::uint8_t> used(n_inner, 0);
   for (std::size_t v = 0; v < n_surface; ++v) {
     const std::uint32_t i = input.inner_id[v];
+    if (i == kOnSurface) {
+      ++result.on_surface_vertices;
+      continue;
+    }
     used[i] = 1;
     double& t = mesh.thickness[n_surface + i];
     t = std::max(t, distance(surface.points[v], input.inner_points[i]));
   }
   const std::size_t n_used = static_cast<std::size_t>(std::count(used.begin(), used.end(), 1));
-  result.welded_inner_vertices = n_surface - n_used;
+  result.welded_inner_vertices = n_surface - result.on_surface_vertices - n_used;
   result.unused_inner_points = n_inner - n_used;
 
   const std::size_t n_faces = surface.triangles.size();
@@ -137,7 +141,8 @@ AssembleResult assemble_shell(const SurfaceMesh& surface, const ShellInput& inpu
     const Triangle& tri = surface.triangles[f];
     const std::uint32_t a = tri[0], b = tri[1], c = tri[2];
     const auto inner = [&](std::uint32_t v) {
-      return static_cast<std::uint32_t>(n_surface + input.inner_id[v]);
+      const std::uint32_t i = input.inner_id[v];
+      return i == kOnSurface ? v : static_cast<std::uint32_t>(n_surface + i);
     };
     const std::uint32_t ai = inner(a), bi = inner(b), ci = inner(c);
     if (ai == bi && bi == ci) ++result.collapsed_prisms;

@@ -40,9 +40,15 @@ namespace vdb_shell {
 struct ShellInput {
   /// Inner vertex positions, world units. Several surface vertices may share one (welded).
   std::vector<Vec3d> inner_points;
-  /// Per surface vertex v: index into inner_points of v's inner vertex. Size num_vertices().
+  /// Per surface vertex v: index into inner_points of v's inner vertex, or kOnSurface. Size
+  /// num_vertices().
   std::vector<std::uint32_t> inner_id;
 };
+
+/// inner_id of a vertex that is its own inner vertex: the shell has zero thickness there and its
+/// prisms become pyramids (two tets) or, with two such corners, one tet. A face with three such
+/// corners has no prism at all.
+constexpr std::uint32_t kOnSurface = 0xFFFFFFFFu;
 
 struct AssembleOptions {
   /// Fill TetMesh::quality with the volume-length ratio of every tet (quality.h).
@@ -58,6 +64,7 @@ struct AssembleResult {
   std::size_t tets = 0;                     ///< mesh.tets.size(), <= 3 * faces
   std::size_t dropped_degenerate_tets = 0;  ///< tets with a repeated vertex, dropped
   std::size_t collapsed_prisms = 0;         ///< prisms whose three inner vertices are one
+  std::size_t on_surface_vertices = 0;      ///< surface vertices with inner_id kOnSurface
   std::size_t welded_inner_vertices = 0;    ///< surface vertices - distinct inner vertices used
   std::size_t unused_inner_points = 0;      ///< inner points no surface vertex refers to
   double seconds = 0.0;                     ///< wall time of assemble_shell()

@@ -42,7 +42,7 @@ constexpr double kMinMargin = 0.1;
 
 /// Per-vertex state of the search.
 struct State {
-  std::vector<double> t;        ///< current arc length
+  std::vector<double> t;        ///< current arc length; 0: on the surface (folded vertices)
   std::vector<char> welded;     ///< still sharing its start weld group's point
 };
 
@@ -91,10 +91,21 @@ class ShellSearch {
       if (std::max(margin, inward_margin(face_normals[v], safe)) <= 0.0)
         folded_.push_back(static_cast<std::uint32_t>(v));
     }
+    // Folded vertices stay on the surface, but a face needs one corner off it to keep a prism
+    // (a tet): should all three of its corners be folded, its last one stays at the floor.
+    std::vector<char> on_surface(n, 0);
+    for (std::uint32_t v : folded_) on_surface[v] = 1;
+    for (const Triangle& tri : surface.triangles)
+      if (on_surface[tri[0]] && on_surface[tri[1]] && on_surface[tri[2]])
+        on_surface[std::max({tri[0], tri[1], tri[2]})] = 0;
+    for (std::uint32_t v : folded_)
+      if (on_surface[v]) on_surface_.push_back(v);
   }
 
-  /// Vertices whose incident faces admit no common inward direction (none found).
+  /// Vertices whose incident faces admit no common inward direction (none found), in order.
   const std::vector<std::uint32_t>& folded() const { return folded_; }
+  /// The folded vertices kept on the surface (t_v = 0), in order.
+  const std::vector<std::uint32_t>& on_surface() const { return on_surface_; }
 
   const std::vector<double>& full() const { return full_; }
   const std::vector<double>& floor() const { return floor_; }
@@ -105,9 +116,17 @@ class ShellSearch {
     s.welded.resize(full_.size());
     for (std::size_t v = 0; v < full_.size(); ++v)
       s.welded[v] = group_size_[start_.input.inner_id[v]] > 1 && start_.arc[v] >= floor_[v];
+    for (std::uint32_t v : on_surface_) {
+      s.t[v] = 0;
+      s.welded[v] = 0;
+    }
     return s;
   }
-  State floor_state() const { return {floor_, std::vector<char>(floor_.size(), 0)}; }
+  State floor_state() const {
+    State s{floor_, std::vector<char>(floor_.size(), 0)};
+    for (std::uint32_t v : on_surface_) s.t[v] = 0;
+    return s;
+  }
 
   Vec3d position(std::size_t v, double t) const {
     const double end = traces_.end_arc(v);
@@ -125,7 +144,10 @@ class ShellSearch {
     std::vector<std::uint32_t> group_slot(start_.input.inner_points.size(), UINT32_MAX);
     for (std::uint32_t v = 0; v < n; ++v) {
       std::uint32_t slot;
-      if (s.welded[v]) {
+      if (s.t[v] == 0) {
+        in.inner_id[v] = kOnSurface;
+        continue;
+      } else if (s.welded[v]) {
         const std::uint32_t g = start_.input.inner_id[v];
         if (group_slot[g] == UINT32_MAX) {
           group_slot[g] = static_cast<std::uint32_t>(in.inner_points.size());
@@ -151,7 +173,7 @@ class ShellSearch {
   std::vector<double> full_, floor_;
   std::vector<Vec3d> fallback_, correction_;
   std::vector<std::uint32_t> group_size_;
-  std::vector<std::uint32_t> folded_;
+  std::vector<std::uint32_t> folded_, on_surface_;
 };
 
 /// Offending tets and inner slots of a check.
@@ -173,7 +195,8 @@ void collect_offenders(const SurfaceMesh& surface, const ShellInput& in,
   for (const auto* list : {&c.first_missing_triangles, &c.first_shared_triangles,
                            &c.first_misoriented_triangles})
     for (std::uint32_t f : *list)
-      for (std::uint32_t v : surface.triangles[f]) slots.push_back(in.inner_id[v]);
+      for (std::uint32_t v : surface.triangles[f])
+        if (in.inner_id[v] != kOnSurface) slots.push_back(in.inner_id[v]);
   std::sort(tets.begin(), tets.end());
   tets.erase(std::unique(tets.begin(), tets.end()), tets.end());
 }
@@ -267,6 +290,7 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
     out.checks = check_shell(surface, out.shell.mesh, o);
   }
   out.depth = s.t;
+  out.on_surface = search.on_surface();
   double sum = 0;
   for (std::uint32_t v = 0; v < n; ++v)
     if (!s.welded[v] && s.t[v] < search.full()[v] * (1.0 - 1e-12)) {

@@ -15,7 +15,8 @@
 // Why it terminates with a valid shell: every round lowers at least one t_v by a fixed factor
 // down to a floor t_min_v > 0, so there are finitely many rounds. The floor configuration
 // (every vertex at t_min_v, no welds) is a thin offset along each trace's first, inward
-// direction, bent where needed to point inward for every incident face, so it is valid; an
+// direction, bent where needed to point inward for every incident face, so it is valid (a
+// folded vertex, with no such direction, stays on the surface: t_v = 0 throughout); an
 // offending element whose vertices are all at the floor is an element of that configuration,
 // which is impossible. So an offending element always has a vertex above its floor, and the
 // loop ends with no offending element. Should a round find only floor elements offending, the
@@ -56,10 +57,13 @@ struct ValidShell {
   std::size_t unwelded = 0;       ///< vertices that left their weld
   bool floor_valid = true;        ///< false: the search stalled and the floor failed too
   std::string floor_problems;     ///< what the floor configuration broke, when it did
-  /// When the search stalled: surface vertices whose incident faces admit no common inward
-  /// direction (their face normals fit in no open hemisphere). Every prism constrains each of its
-  /// corners' inner directions against its face normal, so no thin shell is valid at such a
-  /// vertex: the input needs remeshing there.
+  /// Folded surface vertices kept on the surface (inner_id kOnSurface, depth 0): their incident
+  /// face normals fit in no open hemisphere, and every prism constrains each of its corners'
+  /// inner directions against its face normal, so no thin shell has an inner vertex there. Their
+  /// prisms become pyramids, which the same first-order argument allows (docs/validity.md).
+  std::vector<std::uint32_t> on_surface;
+  /// When the search stalled: every folded vertex (a face with three folded corners keeps one
+  /// off the surface, where no thin shell is valid): the input needs remeshing there.
   std::vector<std::uint32_t> folded_vertices;
   double seconds = 0;             ///< the search, without the final full check (checks.seconds)
 };

@@ -308,6 +308,39 @@ TEST(Assemble, AllInnerVerticesWeldedGiveOneTetPerPrism) {
   }
 }
 
+TEST(Assemble, VerticesOnTheSurfaceTurnPrismsIntoPyramidsAndTets) {
+  // Octahedron vertices 0 (+x) and 2 (+y) are their own inner vertices: the faces through one
+  // of them keep two tets (a pyramid), the two faces through both keep one, the rest three.
+  const SurfaceMesh s = octahedron();
+  ShellInput in = scaled_input(s, 0.5);
+  in.inner_id[0] = kOnSurface;
+  in.inner_id[2] = kOnSurface;
+  const AssembleResult r = assemble_shell(s, in);
+  EXPECT_EQ(r.on_surface_vertices, 2u);
+  EXPECT_EQ(r.welded_inner_vertices, 0u);
+  EXPECT_EQ(r.unused_inner_points, 2u);
+  std::map<std::uint32_t, int> per_face;
+  for (std::size_t t = 0; t < r.mesh.tets.size(); ++t) {
+    ++per_face[r.mesh.source_triangle[t]];
+    EXPECT_GT(volume(r.mesh, r.mesh.tets[t]), 0.0) << "tet " << t;
+  }
+  std::size_t expected = 0;
+  for (std::uint32_t f = 0; f < s.num_faces(); ++f) {
+    const Triangle& tri = s.triangles[f];
+    const int on = static_cast<int>(std::count_if(
+        tri.begin(), tri.end(), [](std::uint32_t v) { return v == 0 || v == 2; }));
+    EXPECT_EQ(per_face[f], 3 - on) << "face " << f;
+    expected += static_cast<std::size_t>(3 - on);
+  }
+  EXPECT_EQ(r.tets, expected);
+  EXPECT_EQ(r.dropped_degenerate_tets, 3 * s.num_faces() - expected);
+  // Conforming, every surface face a boundary face, no vertex 0 or 2 thickness.
+  const ShellCheckResult c = check_shell(s, r.mesh);
+  EXPECT_TRUE(c.valid()) << describe_problems(c);
+  EXPECT_EQ(r.mesh.inner[0], 0);
+  EXPECT_EQ(r.mesh.thickness[0], 0.0);
+}
+
 TEST(Assemble, UnusedInnerPointsAreKeptAndCounted) {
   const SurfaceMesh s = octahedron();
   ShellInput in = scaled_input(s, 0.5);
