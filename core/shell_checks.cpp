@@ -708,6 +708,23 @@ std::string format_list(const std::vector<std::uint32_t>& list) {
   return s.str();
 }
 
+}  // namespace
+
+int tet_volume_class(const std::array<Vec3d, 4>& p, double zero_volume_tolerance) {
+  double l = 0.0;
+  for (const auto& e : kTetEdge) l = std::max(l, distance(p[e[0]], p[e[1]]));
+  const double vol = tet_volume(p[0], p[1], p[2], p[3]);
+  if (std::abs(vol) <= zero_volume_tolerance * l * l * l) return 2;
+  return vol < 0.0 ? 1 : 0;
+}
+
+bool tets_overlap(const std::array<Vec3d, 4>& a, const std::array<Vec3d, 4>& b,
+                  const ShellCheckOptions& options) {
+  return tets_intersect(tet_geometry(a), tet_geometry(b), options);
+}
+
+namespace {
+
 // Inverted and zero-volume tets into `result`.
 void count_volumes(const TetMesh& mesh, const ShellCheckOptions& options,
                    ShellCheckResult& result) {
@@ -719,15 +736,9 @@ void count_volumes(const TetMesh& mesh, const ShellCheckOptions& options,
       [&](std::size_t begin, std::size_t end) {
         for (std::size_t t = begin; t != end; ++t) {
           const Tet& v = mesh.tets[t];
-          const std::array<Vec3d, 4> p = {mesh.points[v[0]], mesh.points[v[1]],
-                                          mesh.points[v[2]], mesh.points[v[3]]};
-          double l = 0.0;
-          for (const auto& e : kTetEdge) l = std::max(l, distance(p[e[0]], p[e[1]]));
-          const double vol = tet_volume(p[0], p[1], p[2], p[3]);
-          if (std::abs(vol) <= options.zero_volume_tolerance * l * l * l)
-            sign[t] = 2;
-          else if (vol < 0.0)
-            sign[t] = 1;
+          sign[t] = static_cast<std::uint8_t>(tet_volume_class(
+              {mesh.points[v[0]], mesh.points[v[1]], mesh.points[v[2]], mesh.points[v[3]]},
+              options.zero_volume_tolerance));
         }
       },
       4096);

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <numeric>
 
 namespace vdb_shell {
 namespace {
@@ -40,6 +41,19 @@ Vec3d most_inward_direction(const std::vector<Vec3d>& normals, Vec3d start) {
 /// face plane) are bent towards the most inward direction.
 constexpr double kMinMargin = 0.1;
 
+/// The surface vertices of every inner vertex (slot), in increasing order.
+struct Members {
+  std::vector<std::uint32_t> start, items;  ///< slot i: items[start[i] .. start[i + 1])
+  struct Range {
+    const std::uint32_t *b, *e;
+    const std::uint32_t* begin() const { return b; }
+    const std::uint32_t* end() const { return e; }
+  };
+  Range operator[](std::uint32_t slot) const {
+    return {items.data() + start[slot], items.data() + start[slot + 1]};
+  }
+};
+
 /// Per-vertex state of the search.
 struct State {
   std::vector<double> t;        ///< current arc length; 0: on the surface (folded vertices)
@@ -55,6 +69,8 @@ class ShellSearch {
     full_.resize(n);
     floor_.assign(n, std::numeric_limits<double>::infinity());
     fallback_.resize(n);
+    cached_t_.assign(n, -1.0);
+    cached_position_.resize(n);
     std::vector<Vec3d> normal(n);
     for (std::size_t f = 0; f < surface.triangles.size(); ++f) {
       const Triangle& tri = surface.triangles[f];
@@ -68,6 +84,24 @@ class ShellSearch {
     }
     group_size_.assign(n, 0);
     for (std::size_t v = 0; v < n; ++v) ++group_size_[start.input.inner_id[v]];
+    group_start_.assign(start.input.inner_points.size() + 1, 0);
+    for (std::size_t v = 0; v < n; ++v) ++group_start_[start.input.inner_id[v] + 1];
+    for (std::size_t g = 0; g + 1 < group_start_.size(); ++g) group_start_[g + 1] += group_start_[g];
+    group_items_.resize(n);
+    {
+      std::vector<std::uint32_t> fill(group_start_.begin(), group_start_.end() - 1);
+      for (std::uint32_t v = 0; v < n; ++v) group_items_[fill[start.input.inner_id[v]]++] = v;
+    }
+    face_start_.assign(n + 1, 0);
+    for (const Triangle& tri : surface.triangles)
+      for (std::uint32_t v : tri) ++face_start_[v + 1];
+    for (std::size_t v = 0; v < n; ++v) face_start_[v + 1] += face_start_[v];
+    face_items_.resize(face_start_.back());
+    {
+      std::vector<std::uint32_t> fill(face_start_.begin(), face_start_.end() - 1);
+      for (std::uint32_t f = 0; f < surface.triangles.size(); ++f)
+        for (std::uint32_t v : surface.triangles[f]) face_items_[fill[v]++] = f;
+    }
     std::vector<std::vector<Vec3d>> face_normals(n);
     for (std::size_t f = 0; f < surface.triangles.size(); ++f)
       for (std::uint32_t v : surface.triangles[f])
@@ -110,7 +144,7 @@ class ShellSearch {
   const std::vector<double>& full() const { return full_; }
   const std::vector<double>& floor() const { return floor_; }
 
-  State initial() const {
+  State initial() {
     State s;
     s.t = full_;
     s.welded.resize(full_.size());
@@ -120,12 +154,197 @@ class ShellSearch {
       s.t[v] = 0;
       s.welded[v] = 0;
     }
+    // A weld group is one slot, ordered by its smallest welded member, until it unwelds whole.
+    // Its depth, the deepest welded member's, holds as long: welded members do not move.
+    group_key_.assign(group_start_.size() - 1, UINT32_MAX);
+    group_depth_.assign(group_start_.size() - 1, 0.0);
+    for (std::uint32_t v = static_cast<std::uint32_t>(full_.size()); v-- > 0;)
+      if (s.welded[v]) {
+        const std::uint32_t g = start_.input.inner_id[v];
+        group_key_[g] = v;
+        group_depth_[g] = std::max(group_depth_[g], s.t[v]);
+      }
     return s;
   }
+
+  /// Prism f as assemble_shell() would build it from build(s): the same ids (their order is all
+  /// the split depends on) and positions, and its tets.
+  struct LocalPrism {
+    std::uint32_t face = 0;
+    std::array<std::uint32_t, 6> ids{};
+    std::array<Vec3d, 6> at;
+    PrismTets tets;
+    std::array<Vec3d, 4> corners(int i) const {
+      std::array<Vec3d, 4> p;
+      for (int c = 0; c < 4; ++c)
+        p[c] = at[std::find(ids.begin(), ids.end(), tets.tets[i][c]) - ids.begin()];
+      return p;
+    }
+  };
+  LocalPrism prism(const State& s, std::uint32_t f) const {
+    const auto n = static_cast<std::uint32_t>(full_.size());
+    const Triangle& tri = surface_.triangles[f];
+    LocalPrism p;
+    p.face = f;
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t v = tri[k];
+      p.ids[k] = v;
+      p.at[k] = surface_.points[v];
+      if (s.t[v] == 0) {
+        p.ids[k + 3] = v;
+        p.at[k + 3] = p.at[k];
+      } else if (s.welded[v]) {
+        const std::uint32_t g = start_.input.inner_id[v];
+        p.ids[k + 3] = n + group_key_[g];
+        p.at[k + 3] = start_.input.inner_points[g];
+      } else {
+        p.ids[k + 3] = n + v;
+        p.at[k + 3] = cached_position(v, s.t[v]);
+      }
+    }
+    p.tets = split_prism(p.ids);
+    return p;
+  }
+
+  /// The surface vertex owning the deepest movable inner corner of tet i of `p` (as the rounds
+  /// choose it), or UINT32_MAX when every inner corner is at its floor.
+  std::uint32_t deepest_corner(const State& s, const LocalPrism& p, int i) const {
+    const auto n = static_cast<std::uint32_t>(full_.size());
+    const Triangle& tri = surface_.triangles[p.face];
+    std::uint32_t best = UINT32_MAX;
+    double best_depth = 0;
+    for (const std::uint32_t id : p.tets.tets[i]) {
+      if (id < n) continue;
+      const std::uint32_t v = tri[std::find(p.ids.begin() + 3, p.ids.end(), id) - p.ids.begin() - 3];
+      const double d = s.welded[v] ? group_depth_[start_.input.inner_id[v]]
+                                   : (s.t[v] > floor_[v] ? s.t[v] : 0.0);
+      if (d > best_depth) {
+        best_depth = d;
+        best = v;
+      }
+    }
+    return best;
+  }
+
+  /// Moves v's inner vertex back one step, as a round does: a welded group leaves its weld
+  /// whole, anything else goes to max(floor, shrink * t). Calls moved(u) for every vertex moved;
+  /// returns how many left their weld.
+  template <class Moved>
+  std::size_t step_back(State& s, std::uint32_t v, double shrink, const Moved& moved) const {
+    if (!s.welded[v]) {
+      s.t[v] = std::max(floor_[v], s.t[v] * shrink);
+      moved(v);
+      return 0;
+    }
+    std::size_t unwelded = 0;
+    const std::uint32_t g = start_.input.inner_id[v];
+    for (std::uint32_t j = group_start_[g]; j < group_start_[g + 1]; ++j) {
+      const std::uint32_t u = group_items_[j];
+      if (!s.welded[u]) continue;
+      s.welded[u] = 0;
+      ++unwelded;
+      moved(u);
+    }
+    return unwelded;
+  }
+
+  /// Steps back, as a round does for an inverted or flat tet (its deepest movable inner corner),
+  /// until every tet of the prisms in `queue`, and of the prisms around every vertex moved on
+  /// the way, is positive or has all its inner corners at their floor (left to the checks).
+  /// Local and serial. Marks the moved vertices in `lowered`; returns how many left their weld.
+  std::size_t settle_volumes(State& s, std::vector<std::uint32_t> queue, double shrink,
+                             double zero_volume_tolerance, std::vector<char>& lowered) const {
+    std::vector<char> queued(surface_.triangles.size(), 0);
+    for (std::uint32_t f : queue) queued[f] = 1;
+    auto moved = [&](std::uint32_t v) {
+      lowered[v] = 1;
+      for (std::uint32_t i = face_start_[v]; i < face_start_[v + 1]; ++i)
+        if (!queued[face_items_[i]]) {
+          queued[face_items_[i]] = 1;
+          queue.push_back(face_items_[i]);
+        }
+    };
+    std::size_t unwelded = 0;
+    for (std::size_t head = 0; head < queue.size(); ++head) {
+      const std::uint32_t f = queue[head];
+      queued[f] = 0;
+      const LocalPrism p = prism(s, f);
+      for (int i = 0; i < p.tets.count; ++i) {
+        if (tet_volume_class(p.corners(i), zero_volume_tolerance) == 0) continue;
+        const std::uint32_t v = deepest_corner(s, p, i);
+        if (v == UINT32_MAX) continue;  // at the floor: left to the checks
+        unwelded += step_back(s, v, shrink, moved);
+        break;  // the prism is queued again
+      }
+    }
+    return unwelded;
+  }
+
+  /// Steps back, for every pair of overlapping prisms (f, g) in `pairs`, the deepest movable
+  /// inner corner of each of their overlapping tets until the two no longer overlap or only
+  /// corners at the floor remain, settling the volumes around every move. Marks the moved
+  /// vertices in `lowered`; returns how many left their weld.
+  std::size_t settle_overlaps(State& s, const std::vector<std::array<std::uint32_t, 2>>& pairs,
+                              double shrink, const ShellCheckOptions& options,
+                              std::vector<char>& lowered) const {
+    std::size_t unwelded = 0;
+    std::vector<std::uint32_t> step, around, moved;
+    for (const auto& [f, g] : pairs) {
+      for (;;) {
+        const LocalPrism a = prism(s, f), b = prism(s, g);
+        step.clear();
+        for (int i = 0; i < a.tets.count; ++i)
+          for (int j = f == g ? i + 1 : 0; j < b.tets.count; ++j) {
+            if (!tets_overlap(a.corners(i), b.corners(j), options)) continue;
+            step.push_back(deepest_corner(s, a, i));
+            step.push_back(deepest_corner(s, b, j));
+          }
+        std::sort(step.begin(), step.end());
+        step.erase(std::unique(step.begin(), step.end()), step.end());
+        if (!step.empty() && step.back() == UINT32_MAX) step.pop_back();
+        if (step.empty()) break;  // apart, or only floor corners left: to the checks
+        around.clear();
+        moved.clear();
+        for (const std::uint32_t v : step) {
+          if (std::find(moved.begin(), moved.end(), v) != moved.end()) continue;  // its group
+          unwelded += step_back(s, v, shrink, [&](std::uint32_t u) {
+            lowered[u] = 1;
+            moved.push_back(u);
+            around.insert(around.end(), face_items_.begin() + face_start_[u],
+                          face_items_.begin() + face_start_[u + 1]);
+          });
+        }
+        std::sort(around.begin(), around.end());
+        around.erase(std::unique(around.begin(), around.end()), around.end());
+        unwelded += settle_volumes(s, around, shrink, options.zero_volume_tolerance, lowered);
+      }
+    }
+    return unwelded;
+  }
+
   State floor_state() const {
     State s{floor_, std::vector<char>(floor_.size(), 0)};
     for (std::uint32_t v : on_surface_) s.t[v] = 0;
     return s;
+  }
+
+  /// The faces around the vertices flagged in `flags`, in increasing order, into `out`.
+  void faces_around(const std::vector<char>& flags, std::vector<std::uint32_t>& out) const {
+    out.clear();
+    for (std::uint32_t v = 0; v < flags.size(); ++v)
+      if (flags[v]) out.insert(out.end(), face_items_.begin() + face_start_[v],
+                               face_items_.begin() + face_start_[v + 1]);
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+  }
+
+  /// position(v, t), remembered per vertex (most keep their depth from round to round).
+  Vec3d cached_position(std::uint32_t v, double t) const {
+    if (cached_t_[v] != t) {
+      cached_t_[v] = t;
+      cached_position_[v] = position(v, t);
+    }
+    return cached_position_[v];
   }
 
   Vec3d position(std::size_t v, double t) const {
@@ -136,33 +355,36 @@ class ShellSearch {
   }
 
   /// Inner vertices of `s` (slots in order of their smallest member) and each slot's members.
-  ShellInput build(const State& s, std::vector<std::vector<std::uint32_t>>& members) const {
+  ShellInput build(const State& s, Members& members) const {
     const std::size_t n = full_.size();
     ShellInput in;
     in.inner_id.resize(n);
-    members.clear();
+    in.inner_points.reserve(n);
     std::vector<std::uint32_t> group_slot(start_.input.inner_points.size(), UINT32_MAX);
     for (std::uint32_t v = 0; v < n; ++v) {
-      std::uint32_t slot;
       if (s.t[v] == 0) {
         in.inner_id[v] = kOnSurface;
-        continue;
       } else if (s.welded[v]) {
         const std::uint32_t g = start_.input.inner_id[v];
         if (group_slot[g] == UINT32_MAX) {
           group_slot[g] = static_cast<std::uint32_t>(in.inner_points.size());
           in.inner_points.push_back(start_.input.inner_points[g]);
-          members.emplace_back();
         }
-        slot = group_slot[g];
+        in.inner_id[v] = group_slot[g];
       } else {
-        slot = static_cast<std::uint32_t>(in.inner_points.size());
-        in.inner_points.push_back(position(v, s.t[v]));
-        members.emplace_back();
+        in.inner_id[v] = static_cast<std::uint32_t>(in.inner_points.size());
+        in.inner_points.push_back(cached_position(v, s.t[v]));
       }
-      in.inner_id[v] = slot;
-      members[slot].push_back(v);
     }
+    members.start.assign(in.inner_points.size() + 1, 0);
+    for (const std::uint32_t slot : in.inner_id)
+      if (slot != kOnSurface) ++members.start[slot + 1];
+    for (std::size_t i = 1; i < members.start.size(); ++i)
+      members.start[i] += members.start[i - 1];
+    members.items.resize(members.start.back());
+    std::vector<std::uint32_t> fill(members.start.begin(), members.start.end() - 1);
+    for (std::uint32_t v = 0; v < n; ++v)
+      if (in.inner_id[v] != kOnSurface) members.items[fill[in.inner_id[v]]++] = v;
     return in;
   }
 
@@ -173,10 +395,17 @@ class ShellSearch {
   std::vector<double> full_, floor_;
   std::vector<Vec3d> fallback_, correction_;
   std::vector<std::uint32_t> group_size_;
+  std::vector<std::uint32_t> group_start_, group_items_;  ///< weld group -> its vertices
+  std::vector<std::uint32_t> group_key_;  ///< per group: its smallest welded vertex (initial)
+  std::vector<double> group_depth_;       ///< per group: its welded members' largest depth
+  std::vector<std::uint32_t> face_start_, face_items_;    ///< vertex -> its faces
   std::vector<std::uint32_t> folded_, on_surface_;
+  // position(v, t) of the last build, by vertex (t = -1: none yet).
+  mutable std::vector<double> cached_t_;
+  mutable std::vector<Vec3d> cached_position_;
 };
 
-/// Offending tets and inner slots of a check.
+/// Offending tets (overlapping pairs aside) and inner slots of a check.
 void collect_offenders(const SurfaceMesh& surface, const ShellInput& in,
                        const ShellCheckResult& c, std::vector<std::uint32_t>& tets,
                        std::vector<std::uint32_t>& slots) {
@@ -186,10 +415,6 @@ void collect_offenders(const SurfaceMesh& surface, const ShellInput& in,
   tets.insert(tets.end(), c.first_inverted_tets.begin(), c.first_inverted_tets.end());
   tets.insert(tets.end(), c.first_zero_volume_tets.begin(), c.first_zero_volume_tets.end());
   tets.insert(tets.end(), c.first_leaking_tets.begin(), c.first_leaking_tets.end());
-  for (const auto& pair : c.first_overlapping_pairs) {
-    tets.push_back(pair[0]);
-    tets.push_back(pair[1]);
-  }
   for (std::uint32_t p : c.first_outside_vertices)
     if (p >= n) slots.push_back(p - n);
   for (const auto* list : {&c.first_missing_triangles, &c.first_shared_triangles,
@@ -209,7 +434,7 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
   const std::uint32_t n = static_cast<std::uint32_t>(surface.points.size());
   ShellSearch search(surface, traces, start, options);
   ValidShell out;
-  std::vector<std::vector<std::uint32_t>> members;
+  Members members;
   AssembleOptions no_quality;
   no_quality.compute_quality = false;
 
@@ -226,15 +451,31 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
 
   State s = search.initial();
   std::vector<std::uint32_t> bad_tets, bad_slots;
+  std::vector<std::array<std::uint32_t, 2>> prism_pairs;
   std::vector<char> lowered(n);
+  std::vector<std::uint32_t> seeds(surface.triangles.size());  // prisms to settle
+  std::iota(seeds.begin(), seeds.end(), 0u);
   for (;; ++out.rounds) {
+    // Inverted and flat tets are local: settle them prism by prism before a round.
+    out.unwelded += search.settle_volumes(s, seeds, options.shrink,
+                                          check_options.zero_volume_tolerance, lowered);
     out.input = search.build(s, members);
     out.shell = assemble_shell(surface, out.input, no_quality);
     out.checks = check(out.shell.mesh);
     if (out.checks.valid() || out.rounds >= options.max_rounds) break;
     collect_offenders(surface, out.input, out.checks, bad_tets, bad_slots);
     std::fill(lowered.begin(), lowered.end(), 0);
-    bool progress = false;
+    // Overlapping prisms, pair by pair: each is stepped back until it is apart.
+    prism_pairs.clear();
+    for (const auto& pair : out.checks.first_overlapping_pairs) {
+      const std::uint32_t f = out.shell.mesh.source_triangle[pair[0]];
+      const std::uint32_t g = out.shell.mesh.source_triangle[pair[1]];
+      prism_pairs.push_back({std::min(f, g), std::max(f, g)});
+    }
+    std::sort(prism_pairs.begin(), prism_pairs.end());
+    prism_pairs.erase(std::unique(prism_pairs.begin(), prism_pairs.end()), prism_pairs.end());
+    out.unwelded += search.settle_overlaps(s, prism_pairs, options.shrink, check_options, lowered);
+    bool progress = std::find(lowered.begin(), lowered.end(), 1) != lowered.end();
     auto slot_depth = [&](std::uint32_t slot) {
       double d = 0;
       for (std::uint32_t v : members[slot])
@@ -278,6 +519,7 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
       out.folded_vertices = search.folded();
       break;
     }
+    search.faces_around(lowered, seeds);
   }
 
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -5,15 +5,18 @@
 // every prism positive (for the split actually used), no two tets intersecting, no tet leaving
 // the surface, every inner vertex inside, every input triangle a boundary face.
 //
-// Method: start from the traced (and welded) end points. Assemble and check: first the tet
-// volumes alone (O(T)), and only when no tet is inverted or flat everything else (overlaps,
-// leaks, inner points, faces). For every offending element move back the deepest of its movable
-// vertices, t_v <- max(t_min_v, shrink * t_v) (a welded group leaves its weld when any member
-// moves). Repeat until no element offends. Fixing inversions before looking for overlaps keeps
-// the vertices that only overlap an inverted neighbour where they are.
+// Method: start from the traced (and welded) end points. A step back moves t_v <- max(t_min_v,
+// shrink * t_v) (a welded group leaves its weld instead). First settle the volumes locally: any
+// prism with an inverted or flat tet steps back that tet's deepest movable inner vertex, and the
+// prisms around it are tested again, until none is left (a tet's volume and the prism split
+// depend on its own prism only). Then rounds: assemble and check everything; step back every
+// pair of overlapping prisms, pair by pair and locally, until it is apart; step back the
+// deepest movable vertex of every other offending element once; settle the volumes around
+// every move; repeat until no element offends.
 //
-// Why it terminates with a valid shell: every round lowers at least one t_v by a fixed factor
-// down to a floor t_min_v > 0, so there are finitely many rounds. The floor configuration
+// Why it terminates with a valid shell: every step lowers one t_v by a fixed factor down to a
+// floor t_min_v > 0 (or undoes a weld), and every round takes at least one step, so there are
+// finitely many steps and rounds. The floor configuration
 // (every vertex at t_min_v, no welds) is a thin offset along each trace's first, inward
 // direction, bent where needed to point inward for every incident face, so it is valid (a
 // folded vertex, with no such direction, stays on the surface: t_v = 0 throughout); an
@@ -22,8 +25,8 @@
 // loop ends with no offending element. Should a round find only floor elements offending, the
 // floor configuration is checked and the run fails, naming what it broke.
 // Vertices that were never involved keep their full depth: the shell stays as thick as the
-// traces allow wherever it is already valid; the gentle shrink takes little more than needed
-// from those that were (docs/validity.md compares it with a harder shrink plus refinement).
+// traces allow wherever it is already valid; the gentle shrink, applied locally until each
+// offence is gone, takes little more than needed from those that were (docs/validity.md).
 //
 // Cost: one ShellChecker (shell_checks.h) serves every round, testing only the prisms that
 // moved since the previous round (or still offend); the result gets one full check_shell().
