@@ -348,10 +348,14 @@ RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& 
     message << opt.input << ": " << n << (n == 1 ? " surface vertex is" : " surface vertices are")
             << " folded: the incident faces have no common inward direction (first: vertex " << v
             << " at (" << p.x << ", " << p.y << ", " << p.z
-            << ")); keeping them on the surface did not make the shell valid (a face with three "
-               "folded corners, or a fold sharper than the thinnest shell); remesh the surface "
-               "around them (for a .vdb input, a lower --adaptivity); nothing was written";
-    throw InputError(message.str());
+            << ")); keeping them on the surface did not make the shell valid ("
+            << describe_problems(checks)
+            << "; likely a fold sharper than the thinnest shell); "
+               "remesh the surface around them (for a .vdb input, a lower --adaptivity); nothing "
+               "was written";
+    std::string text = message.str();
+    std::replace(text.begin(), text.end(), '\n', ';');
+    throw InputError(text);
   }
   if (!checks.valid()) {
     std::string message = opt.input + ": could not make the shell valid after " +
@@ -429,6 +433,7 @@ RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& 
                    {"moved_back_mean_fraction", valid.moved_back_mean},
                    {"unwelded_vertices", valid.unwelded},
                    {"on_surface_vertices", valid.on_surface.size()},
+                   {"cap_faces", valid.cap_faces},
                    {"floor_valid", valid.floor_valid},
                    {"seconds", valid.seconds}};
   j["quality"] = {{"min", quality.min_quality},

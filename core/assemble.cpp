@@ -95,7 +95,7 @@ AssembleResult assemble_shell(const SurfaceMesh& surface, const ShellInput& inpu
     throw InputError("assemble_shell: " + std::to_string(input.inner_id.size()) +
                      " inner ids for " + std::to_string(n_surface) +
                      " surface vertices; give one inner id per surface vertex");
-  if (n_surface + n_inner > std::numeric_limits<std::uint32_t>::max())
+  if (n_surface + n_inner + input.cap_points.size() > std::numeric_limits<std::uint32_t>::max())
     throw InputError("assemble_shell: " + std::to_string(n_surface + n_inner) +
                      " points do not fit 32-bit indices");
   for (std::size_t v = 0; v < n_surface; ++v)
@@ -103,6 +103,23 @@ AssembleResult assemble_shell(const SurfaceMesh& surface, const ShellInput& inpu
       throw InputError("assemble_shell: surface vertex " + std::to_string(v) +
                        " refers to inner vertex " + std::to_string(input.inner_id[v]) +
                        ", but there are only " + std::to_string(n_inner) + " inner points");
+  const std::size_t n_caps = input.cap_faces.size();
+  if (input.cap_points.size() != n_caps)
+    throw InputError("assemble_shell: " + std::to_string(input.cap_points.size()) +
+                     " cap points for " + std::to_string(n_caps) + " cap faces; give one each");
+  std::vector<std::uint32_t> cap_of(surface.triangles.size(), UINT32_MAX);
+  for (std::size_t k = 0; k < n_caps; ++k) {
+    const std::uint32_t f = input.cap_faces[k];
+    if (f >= surface.triangles.size() || (k > 0 && f <= input.cap_faces[k - 1]))
+      throw InputError("assemble_shell: cap face " + std::to_string(f) +
+                       " is out of range or order; list faces once, ascending");
+    for (const std::uint32_t v : surface.triangles[f])
+      if (v < n_surface && input.inner_id[v] != kOnSurface)
+        throw InputError("assemble_shell: cap face " + std::to_string(f) + " has vertex " +
+                         std::to_string(v) + " off the surface; a cap face needs all three "
+                         "corners kOnSurface");
+    cap_of[f] = static_cast<std::uint32_t>(k);
+  }
   for (std::size_t f = 0; f < surface.triangles.size(); ++f)
     for (const std::uint32_t v : surface.triangles[f])
       if (v >= n_surface)
@@ -114,11 +131,12 @@ AssembleResult assemble_shell(const SurfaceMesh& surface, const ShellInput& inpu
   TetMesh& mesh = result.mesh;
   mesh.points = surface.points;
   mesh.points.insert(mesh.points.end(), input.inner_points.begin(), input.inner_points.end());
-  mesh.inner.assign(n_surface + n_inner, 0);
+  mesh.points.insert(mesh.points.end(), input.cap_points.begin(), input.cap_points.end());
+  mesh.inner.assign(mesh.points.size(), 0);
   std::fill(mesh.inner.begin() + static_cast<std::ptrdiff_t>(n_surface), mesh.inner.end(), 1);
 
   // Thickness of an inner vertex: its distance to the farthest surface vertex that ends there.
-  mesh.thickness.assign(n_surface + n_inner, 0.0);
+  mesh.thickness.assign(mesh.points.size(), 0.0);
   std::vector<std::uint8_t> used(n_inner, 0);
   for (std::size_t v = 0; v < n_surface; ++v) {
     const std::uint32_t i = input.inner_id[v];
@@ -144,6 +162,16 @@ AssembleResult assemble_shell(const SurfaceMesh& surface, const ShellInput& inpu
       const std::uint32_t i = input.inner_id[v];
       return i == kOnSurface ? v : static_cast<std::uint32_t>(n_surface + i);
     };
+    if (cap_of[f] != UINT32_MAX) {  // the face and its cap point, as a prism's first tet
+      const std::uint32_t x = static_cast<std::uint32_t>(n_surface + n_inner + cap_of[f]);
+      mesh.tets.push_back({a, b, x, c});
+      mesh.source_triangle.push_back(static_cast<std::uint32_t>(f));
+      mesh.thickness[x] = std::max({distance(mesh.points[x], surface.points[a]),
+                                    distance(mesh.points[x], surface.points[b]),
+                                    distance(mesh.points[x], surface.points[c])});
+      ++result.cap_tets;
+      continue;
+    }
     const std::uint32_t ai = inner(a), bi = inner(b), ci = inner(c);
     if (ai == bi && bi == ci) ++result.collapsed_prisms;
     const PrismTets prism = split_prism({a, b, c, ai, bi, ci});

@@ -43,11 +43,15 @@ struct ShellInput {
   /// Per surface vertex v: index into inner_points of v's inner vertex, or kOnSurface. Size
   /// num_vertices().
   std::vector<std::uint32_t> inner_id;
+  /// Faces whose three corners are kOnSurface, each with one extra inner point below it: the
+  /// face's prism is the single tet from the face to that point (ascending faces).
+  std::vector<std::uint32_t> cap_faces;
+  std::vector<Vec3d> cap_points;  ///< one per cap face, after inner_points in the tet mesh
 };
 
 /// inner_id of a vertex that is its own inner vertex: the shell has zero thickness there and its
 /// prisms become pyramids (two tets) or, with two such corners, one tet. A face with three such
-/// corners has no prism at all.
+/// corners has no prism, unless it is a cap face (ShellInput::cap_faces).
 constexpr std::uint32_t kOnSurface = 0xFFFFFFFFu;
 
 struct AssembleOptions {
@@ -65,6 +69,7 @@ struct AssembleResult {
   std::size_t dropped_degenerate_tets = 0;  ///< tets with a repeated vertex, dropped
   std::size_t collapsed_prisms = 0;         ///< prisms whose three inner vertices are one
   std::size_t on_surface_vertices = 0;      ///< surface vertices with inner_id kOnSurface
+  std::size_t cap_tets = 0;                 ///< tets of cap faces
   std::size_t welded_inner_vertices = 0;    ///< surface vertices - distinct inner vertices used
   std::size_t unused_inner_points = 0;      ///< inner points no surface vertex refers to
   double seconds = 0.0;                     ///< wall time of assemble_shell()

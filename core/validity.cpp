@@ -125,21 +125,28 @@ class ShellSearch {
       if (std::max(margin, inward_margin(face_normals[v], safe)) <= 0.0)
         folded_.push_back(static_cast<std::uint32_t>(v));
     }
-    // Folded vertices stay on the surface, but a face needs one corner off it to keep a prism
-    // (a tet): should all three of its corners be folded, its last one stays at the floor.
-    std::vector<char> on_surface(n, 0);
-    for (std::uint32_t v : folded_) on_surface[v] = 1;
-    for (const Triangle& tri : surface.triangles)
-      if (on_surface[tri[0]] && on_surface[tri[1]] && on_surface[tri[2]])
-        on_surface[std::max({tri[0], tri[1], tri[2]})] = 0;
-    for (std::uint32_t v : folded_)
-      if (on_surface[v]) on_surface_.push_back(v);
+    // Folded vertices stay on the surface. A face with three folded corners keeps a prism as one
+    // tet to a cap point of its own, at the floor depth below its centroid.
+    std::vector<char> folded(n, 0);
+    for (std::uint32_t v : folded_) folded[v] = 1;
+    for (std::uint32_t f = 0; f < surface.triangles.size(); ++f) {
+      const Triangle& tri = surface.triangles[f];
+      if (!folded[tri[0]] || !folded[tri[1]] || !folded[tri[2]]) continue;
+      const std::array<Vec3d, 3> p = {surface.points[tri[0]], surface.points[tri[1]],
+                                      surface.points[tri[2]]};
+      const double edge =
+          std::min({distance(p[0], p[1]), distance(p[1], p[2]), distance(p[2], p[0])});
+      caps_.cap_faces.push_back(f);
+      caps_.cap_points.push_back((p[0] + p[1] + p[2]) / 3.0 -
+                                 normalized(face_normal_area(surface, f)) *
+                                     (options.floor_fraction * edge));
+    }
   }
 
   /// Vertices whose incident faces admit no common inward direction (none found), in order.
   const std::vector<std::uint32_t>& folded() const { return folded_; }
-  /// The folded vertices kept on the surface (t_v = 0), in order.
-  const std::vector<std::uint32_t>& on_surface() const { return on_surface_; }
+  /// Faces with three folded corners and their cap points (ShellInput::cap_faces).
+  std::size_t caps() const { return caps_.cap_faces.size(); }
 
   const std::vector<double>& full() const { return full_; }
   const std::vector<double>& floor() const { return floor_; }
@@ -150,7 +157,7 @@ class ShellSearch {
     s.welded.resize(full_.size());
     for (std::size_t v = 0; v < full_.size(); ++v)
       s.welded[v] = group_size_[start_.input.inner_id[v]] > 1 && start_.arc[v] >= floor_[v];
-    for (std::uint32_t v : on_surface_) {
+    for (std::uint32_t v : folded_) {
       s.t[v] = 0;
       s.welded[v] = 0;
     }
@@ -201,6 +208,14 @@ class ShellSearch {
         p.ids[k + 3] = n + v;
         p.at[k + 3] = cached_position(v, s.t[v]);
       }
+    }
+    const auto cap = std::lower_bound(caps_.cap_faces.begin(), caps_.cap_faces.end(), f);
+    if (cap != caps_.cap_faces.end() && *cap == f) {  // as assemble_shell(): one tet, no mover
+      p.ids[3] = UINT32_MAX;
+      p.at[3] = caps_.cap_points[static_cast<std::size_t>(cap - caps_.cap_faces.begin())];
+      p.tets.count = 1;
+      p.tets.tets[0] = {p.ids[0], p.ids[1], p.ids[3], p.ids[2]};
+      return p;
     }
     p.tets = split_prism(p.ids);
     return p;
@@ -324,7 +339,7 @@ class ShellSearch {
 
   State floor_state() const {
     State s{floor_, std::vector<char>(floor_.size(), 0)};
-    for (std::uint32_t v : on_surface_) s.t[v] = 0;
+    for (std::uint32_t v : folded_) s.t[v] = 0;
     return s;
   }
 
@@ -376,6 +391,8 @@ class ShellSearch {
         in.inner_points.push_back(cached_position(v, s.t[v]));
       }
     }
+    in.cap_faces = caps_.cap_faces;
+    in.cap_points = caps_.cap_points;
     members.start.assign(in.inner_points.size() + 1, 0);
     for (const std::uint32_t slot : in.inner_id)
       if (slot != kOnSurface) ++members.start[slot + 1];
@@ -399,7 +416,8 @@ class ShellSearch {
   std::vector<std::uint32_t> group_key_;  ///< per group: its smallest welded vertex (initial)
   std::vector<double> group_depth_;       ///< per group: its welded members' largest depth
   std::vector<std::uint32_t> face_start_, face_items_;    ///< vertex -> its faces
-  std::vector<std::uint32_t> folded_, on_surface_;
+  std::vector<std::uint32_t> folded_;  ///< on the surface throughout (t_v = 0)
+  ShellInput caps_;                    ///< cap_faces and cap_points only
   // position(v, t) of the last build, by vertex (t = -1: none yet).
   mutable std::vector<double> cached_t_;
   mutable std::vector<Vec3d> cached_position_;
@@ -476,8 +494,10 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
     prism_pairs.erase(std::unique(prism_pairs.begin(), prism_pairs.end()), prism_pairs.end());
     out.unwelded += search.settle_overlaps(s, prism_pairs, options.shrink, check_options, lowered);
     bool progress = std::find(lowered.begin(), lowered.end(), 1) != lowered.end();
+    const auto n_slots = static_cast<std::uint32_t>(out.input.inner_points.size());
     auto slot_depth = [&](std::uint32_t slot) {
       double d = 0;
+      if (slot >= n_slots) return d;  // a cap point: never moves
       for (std::uint32_t v : members[slot])
         if (s.welded[v] || s.t[v] > search.floor()[v]) d = std::max(d, s.t[v]);
       return d;  // 0: every member at its floor, nothing to move
@@ -532,7 +552,8 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
     out.checks = check_shell(surface, out.shell.mesh, o);
   }
   out.depth = s.t;
-  out.on_surface = search.on_surface();
+  out.on_surface = search.folded();
+  out.cap_faces = search.caps();
   double sum = 0;
   for (std::uint32_t v = 0; v < n; ++v)
     if (!s.welded[v] && s.t[v] < search.full()[v] * (1.0 - 1e-12)) {

@@ -65,8 +65,10 @@ struct ValidShell {
   /// inner directions against its face normal, so no thin shell has an inner vertex there. Their
   /// prisms become pyramids, which the same first-order argument allows (docs/validity.md).
   std::vector<std::uint32_t> on_surface;
-  /// When the search stalled: every folded vertex (a face with three folded corners keeps one
-  /// off the surface, where no thin shell is valid): the input needs remeshing there.
+  /// Faces whose three corners are folded: their prism is one tet to a cap point at the floor
+  /// depth below the face (ShellInput::cap_faces).
+  std::size_t cap_faces = 0;
+  /// When the search stalled: every folded vertex (the failure is likely near them).
   std::vector<std::uint32_t> folded_vertices;
   double seconds = 0;             ///< the search, without the final full check (checks.seconds)
 };

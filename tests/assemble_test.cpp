@@ -341,6 +341,40 @@ TEST(Assemble, VerticesOnTheSurfaceTurnPrismsIntoPyramidsAndTets) {
   EXPECT_EQ(r.mesh.thickness[0], 0.0);
 }
 
+TEST(Assemble, CapFaceIsOneTetToItsCapPoint) {
+  // Octahedron vertices 0 (+x), 2 (+y) and 4 (+z) on the surface: the face through all three has
+  // no prism of its own, so it gets one tet to a cap point just below its centroid.
+  const SurfaceMesh s = octahedron();
+  ShellInput in = scaled_input(s, 0.5);
+  for (std::uint32_t v : {0u, 2u, 4u}) in.inner_id[v] = kOnSurface;
+  std::uint32_t cap = 0;
+  while (sorted_key(s.triangles[cap][0], s.triangles[cap][1], s.triangles[cap][2]) !=
+         Key{0, 2, 4})
+    ++cap;
+  in.cap_faces = {cap};
+  in.cap_points = {Vec3d{1, 1, 1} * (0.9 / 3.0)};
+  const AssembleResult r = assemble_shell(s, in);
+  EXPECT_EQ(r.cap_tets, 1u);
+  EXPECT_EQ(r.mesh.points.size(), 6u + 6u + 1u);
+  EXPECT_EQ(r.mesh.inner[12], 1);
+  std::size_t on_cap = 0;
+  for (std::size_t t = 0; t < r.mesh.tets.size(); ++t) {
+    EXPECT_GT(volume(r.mesh, r.mesh.tets[t]), 0.0) << "tet " << t;
+    if (r.mesh.source_triangle[t] == cap) {
+      ++on_cap;
+      EXPECT_EQ(std::set<std::uint32_t>(r.mesh.tets[t].begin(), r.mesh.tets[t].end()),
+                (std::set<std::uint32_t>{0, 2, 4, 12}));
+    }
+  }
+  EXPECT_EQ(on_cap, 1u);
+  const ShellCheckResult c = check_shell(s, r.mesh);
+  EXPECT_TRUE(c.valid()) << describe_problems(c);
+
+  // A cap face needs all three corners on the surface.
+  in.inner_id[4] = 4;
+  EXPECT_THROW(assemble_shell(s, in), InputError);
+}
+
 TEST(Assemble, UnusedInnerPointsAreKeptAndCounted) {
   const SurfaceMesh s = octahedron();
   ShellInput in = scaled_input(s, 0.5);
