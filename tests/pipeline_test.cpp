@@ -211,7 +211,7 @@ TEST(Pipeline, VdbInputRoundTrip) {
 TEST(Pipeline, FoldedVerticesStayOnTheSurface) {
   // fandisk's level set meshed adaptively (10,188 faces at 0.3, closed, no self-intersection) has
   // one vertex whose incident faces admit no common inward direction: it stays on the surface and
-  // the shell is valid. At 0.6 (a face with three folded corners) that is not enough: a clear
+  // the shell is valid. At 0.6 the surface nearly touches itself next to its folds: a clear
   // exit 2 naming them.
   const auto meshes = test::shared_meshes_dir();
   if (meshes.empty()) GTEST_SKIP() << "../shared/meshes is absent";
