@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <unordered_map>
 
 #include "core/errors.h"
 
@@ -21,8 +23,7 @@ Vec3d point_at_arc(const TraceResult& t, std::size_t v, double s) {
 }
 
 InnerVertices place_inner_vertices(const SurfaceMesh& mesh, const TraceResult& traces,
-                                   const ThicknessOptions& options,
-                                   const PointIndexFactory& make_index) {
+                                   const ThicknessOptions& options) {
   if (!(options.max_thickness >= 0.0) || !std::isfinite(options.max_thickness))
     throw InputError("--max-thickness must be a finite length >= 0 (0: no limit)");
   if (!(options.edge_factor >= 0.0) || !std::isfinite(options.edge_factor))
@@ -61,23 +62,53 @@ InnerVertices place_inner_vertices(const SurfaceMesh& mesh, const TraceResult& t
   std::vector<char> weldable(n);
   for (std::size_t v = 0; v < n; ++v)
     weldable[v] = out.arc[v] > 0.0 && out.arc[v] >= traces.end_arc(v);
+  // Greedy, in vertex order: a weldable end joins the smallest earlier representative within
+  // `tol`, or becomes one. Only representatives are indexed (cells of side `tol`, each listing
+  // its representatives in increasing order): where thousands of traces end together, a query
+  // meets the few representatives there, not every end.
   std::vector<std::uint32_t> rep(n);
   for (std::uint32_t v = 0; v < n; ++v) rep[v] = v;
   if (tol > 0.0 && n > 0) {
-    const std::unique_ptr<PointIndex> index = make_index(ends, tol);
-    std::vector<std::uint32_t> near;
+    struct Key {
+      std::int64_t i, j, k;
+      bool operator==(const Key& o) const { return i == o.i && j == o.j && k == o.k; }
+    };
+    struct Hash {
+      std::size_t operator()(const Key& c) const {
+        return static_cast<std::size_t>(c.i * 73856093LL ^ c.j * 19349663LL ^ c.k * 83492791LL);
+      }
+    };
+    auto key = [&](const Vec3d& p) {
+      return Key{static_cast<std::int64_t>(std::floor(p.x / tol)),
+                 static_cast<std::int64_t>(std::floor(p.y / tol)),
+                 static_cast<std::int64_t>(std::floor(p.z / tol))};
+    };
+    std::unordered_map<Key, std::vector<std::uint32_t>, Hash> reps;
+    const double tol2 = tol * tol;
     for (std::uint32_t v = 0; v < n; ++v) {
       // Only trace ends weld: not the surface itself, and not points a thickness limit placed
       // mid-trace (welding could carry them past their limit).
       if (!weldable[v]) continue;
-      index->find_within(ends[v], tol, near);
-      for (std::uint32_t u : near) {
-        if (u >= v) break;
-        if (rep[u] == u && weldable[u]) {
-          rep[v] = u;
-          ++out.welded;
-          break;
-        }
+      const Key c = key(ends[v]);
+      std::uint32_t best = v;
+      for (std::int64_t i = c.i - 1; i <= c.i + 1; ++i)
+        for (std::int64_t j = c.j - 1; j <= c.j + 1; ++j)
+          for (std::int64_t k = c.k - 1; k <= c.k + 1; ++k) {
+            const auto it = reps.find({i, j, k});
+            if (it == reps.end()) continue;
+            for (const std::uint32_t u : it->second) {
+              if (u >= best) break;
+              if (norm2(ends[u] - ends[v]) <= tol2) {
+                best = u;
+                break;
+              }
+            }
+          }
+      if (best != v) {
+        rep[v] = best;
+        ++out.welded;
+      } else {
+        reps[c].push_back(v);
       }
     }
   }

@@ -15,7 +15,6 @@
 #include <vector>
 
 #include "core/assemble.h"
-#include "core/point_index.h"
 #include "core/trace.h"
 
 namespace vdb_shell {
@@ -36,8 +35,7 @@ struct InnerVertices {
 
 /// \throw InputError for negative or non-finite limits.
 InnerVertices place_inner_vertices(const SurfaceMesh& mesh, const TraceResult& traces,
-                                   const ThicknessOptions& options,
-                                   const PointIndexFactory& make_index = make_hash_point_index);
+                                   const ThicknessOptions& options);
 
 /// Point of trace v at arc length `s` (clamped to the trace), interpolated linearly.
 Vec3d point_at_arc(const TraceResult& traces, std::size_t v, double s);
