@@ -340,6 +340,20 @@ RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& 
   const ShellCheckResult& checks = valid.checks;
   const QualitySummary quality = summarize_quality(mesh, shell.mesh);
   const double t_assemble = t_inner + progress.stop();
+  if (!checks.valid()) {
+    // A surface that crosses itself bounds no single volume: bad input, not a search failure.
+    const auto crossing = surface_self_intersections(mesh, 1);
+    if (!crossing.empty()) {
+      const std::uint32_t f = crossing[0][0], g = crossing[0][1];
+      const Vec3d& p = mesh.points[mesh.triangles[f][0]];
+      std::ostringstream message;
+      message << opt.input << ": the surface intersects itself (triangles " << f << " and " << g
+              << ", near (" << p.x << ", " << p.y << ", " << p.z
+              << ")), so it bounds no single volume and no valid shell exists; repair it (for a "
+                 ".vdb input, a lower --adaptivity); nothing was written";
+      throw InputError(message.str());
+    }
+  }
   if (!checks.valid() && !valid.folded_vertices.empty()) {
     const std::uint32_t v = valid.folded_vertices.front();
     const Vec3d& p = mesh.points[v];
@@ -434,6 +448,7 @@ RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& 
                    {"unwelded_vertices", valid.unwelded},
                    {"on_surface_vertices", valid.on_surface.size()},
                    {"cap_faces", valid.cap_faces},
+                   {"floor_drops", valid.floor_drops},
                    {"floor_valid", valid.floor_valid},
                    {"seconds", valid.seconds}};
   j["quality"] = {{"min", quality.min_quality},

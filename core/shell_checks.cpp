@@ -298,6 +298,36 @@ bool geometries_overlap(const TetGeometry& a, const TetGeometry& b, double toler
   return true;
 }
 
+// Whether triangles a and b cross (separating axes: both normals, the 9 cross products of their
+// edges, and each normal crossed with the other's edges for coplanar pairs); projections that
+// overlap by no more than `tolerance` only touch.
+bool triangles_cross(const std::array<Vec3d, 3>& a, const std::array<Vec3d, 3>& b,
+                     double tolerance) {
+  auto separated = [&](const Vec3d& axis) {
+    const double len2 = norm2(axis);
+    if (!(len2 > 0.0)) return false;
+    const Vec3d u = axis / std::sqrt(len2);
+    double a_lo = dot(u, a[0]), a_hi = a_lo, b_lo = dot(u, b[0]), b_hi = b_lo;
+    for (int k = 1; k < 3; ++k) {
+      a_lo = std::min(a_lo, dot(u, a[k]));
+      a_hi = std::max(a_hi, dot(u, a[k]));
+      b_lo = std::min(b_lo, dot(u, b[k]));
+      b_hi = std::max(b_hi, dot(u, b[k]));
+    }
+    return b_hi <= a_lo + tolerance || a_hi <= b_lo + tolerance;
+  };
+  const Vec3d ea[3] = {a[1] - a[0], a[2] - a[1], a[0] - a[2]};
+  const Vec3d eb[3] = {b[1] - b[0], b[2] - b[1], b[0] - b[2]};
+  const Vec3d na = cross(ea[0], a[2] - a[0]), nb = cross(eb[0], b[2] - b[0]);
+  if (separated(na) || separated(nb)) return false;
+  for (const Vec3d& da : ea)
+    for (const Vec3d& db : eb)
+      if (separated(cross(da, db))) return false;
+  for (int k = 0; k < 3; ++k)
+    if (separated(cross(na, ea[k])) || separated(cross(nb, eb[k]))) return false;
+  return true;
+}
+
 // Whether triangle t crosses the interior of tet g (separating axes: the triangle's normal, the
 // tet's face normals, the 18 cross products of their edges).
 bool triangle_crosses_tet(const std::array<Vec3d, 3>& t, const TetGeometry& g, double tolerance) {
@@ -716,6 +746,57 @@ int tet_volume_class(const std::array<Vec3d, 4>& p, double zero_volume_tolerance
   const double vol = tet_volume(p[0], p[1], p[2], p[3]);
   if (std::abs(vol) <= zero_volume_tolerance * l * l * l) return 2;
   return vol < 0.0 ? 1 : 0;
+}
+
+std::vector<std::array<std::uint32_t, 2>> surface_self_intersections(const SurfaceMesh& surface,
+                                                                      std::size_t max_listed) {
+  std::vector<std::array<std::uint32_t, 2>> out;
+  const std::size_t n = surface.triangles.size();
+  if (n == 0) return out;
+  const BBox box = bounding_box(surface);
+  double mean_edge = 0;
+  for (std::size_t f = 0; f < n; ++f) {
+    const std::array<Vec3d, 3> t = corners(surface, f);
+    mean_edge += (distance(t[0], t[1]) + distance(t[1], t[2]) + distance(t[2], t[0])) / (3.0 * n);
+  }
+  double h = std::max(mean_edge, 1e-12 * box.diagonal());
+  while (std::ceil(box.extent().x / h + 1) * std::ceil(box.extent().y / h + 1) *
+             std::ceil(box.extent().z / h + 1) > 8.0 * static_cast<double>(n) + 64.0)
+    h *= 1.25;
+  BBox grid_box = box;
+  grid_box.expand(box.lo - Vec3d{h, h, h});
+  grid_box.expand(box.hi + Vec3d{h, h, h});
+  const TetGrid grid(grid_box, h);
+  std::vector<std::vector<std::uint32_t>> cell_faces(grid.num_cells());
+  std::vector<std::vector<std::uint32_t>> face_cells(n);
+  for (std::size_t f = 0; f < n; ++f) {
+    const std::array<Vec3d, 3> t = corners(surface, f);
+    face_cells[f].resize(grid.cells_of_triangle(t, nullptr));
+    grid.cells_of_triangle(t, face_cells[f].data());
+    for (const std::uint32_t c : face_cells[f]) cell_faces[c].push_back(static_cast<std::uint32_t>(f));
+  }
+  // A triangle as a flat tet: triangle_crosses_tet() with the fourth corner on the third.
+  std::vector<std::uint32_t> mark(n, UINT32_MAX);
+  for (std::uint32_t f = 0; f < n && out.size() < max_listed; ++f) {
+    const std::array<Vec3d, 3> a = corners(surface, f);
+    const Triangle& ta = surface.triangles[f];
+    for (const std::uint32_t c : face_cells[f])
+      for (const std::uint32_t g : cell_faces[c]) {
+        if (g <= f || mark[g] == f) continue;
+        mark[g] = f;
+        const Triangle& tb = surface.triangles[g];
+        int shared = 0;
+        for (const std::uint32_t u : ta)
+          shared += (u == tb[0]) + (u == tb[1]) + (u == tb[2]);
+        if (shared >= 2) continue;  // neighbours across an edge only touch (2-manifold)
+        const std::array<Vec3d, 3> b = corners(surface, g);
+        const double tol = 1e-9 * std::max({distance(a[0], a[1]), distance(a[1], a[2]),
+                                            distance(a[2], a[0]), distance(b[0], b[1]),
+                                            distance(b[1], b[2]), distance(b[2], b[0])});
+        if (triangles_cross(a, b, tol) && out.size() < max_listed) out.push_back({f, g});
+      }
+  }
+  return out;
 }
 
 bool tets_overlap(const std::array<Vec3d, 4>& a, const std::array<Vec3d, 4>& b,

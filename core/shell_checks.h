@@ -149,6 +149,12 @@ class ShellChecker {
   std::unique_ptr<Impl> impl_;
 };
 
+/// Pairs of surface triangles (i < j, ascending) whose interiors cross: the surface intersects
+/// itself and bounds no single volume. Triangles that only touch (a shared vertex or edge
+/// included) do not count. At most `max_listed` pairs.
+std::vector<std::array<std::uint32_t, 2>> surface_self_intersections(const SurfaceMesh& surface,
+                                                                      std::size_t max_listed);
+
 /// One line per failed check ("3 inverted tets (first: 12, 40, 41)"); "" when valid.
 std::string describe_problems(const ShellCheckResult& result);
 

@@ -70,6 +70,7 @@ class ShellSearch {
     floor_.assign(n, std::numeric_limits<double>::infinity());
     fallback_.resize(n);
     cached_t_.assign(n, -1.0);
+    drops_.assign(n, 0);
     cached_position_.resize(n);
     std::vector<Vec3d> normal(n);
     for (std::size_t f = 0; f < surface.triangles.size(); ++f) {
@@ -337,6 +338,14 @@ class ShellSearch {
     return unwelded;
   }
 
+  /// Multiplies v's floor by `factor` unless it was lowered `max_drops` times already.
+  bool lower_floor(std::uint32_t v, double factor, int max_drops) {
+    if (drops_[v] >= max_drops) return false;
+    ++drops_[v];
+    floor_[v] *= factor;
+    return true;
+  }
+
   State floor_state() const {
     State s{floor_, std::vector<char>(floor_.size(), 0)};
     for (std::uint32_t v : folded_) s.t[v] = 0;
@@ -417,6 +426,7 @@ class ShellSearch {
   std::vector<double> group_depth_;       ///< per group: its welded members' largest depth
   std::vector<std::uint32_t> face_start_, face_items_;    ///< vertex -> its faces
   std::vector<std::uint32_t> folded_;  ///< on the surface throughout (t_v = 0)
+  std::vector<int> drops_;             ///< per vertex: how often its floor was lowered
   ShellInput caps_;                    ///< cap_faces and cap_points only
   // position(v, t) of the last build, by vertex (t = -1: none yet).
   mutable std::vector<double> cached_t_;
@@ -531,7 +541,31 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
     for (std::uint32_t slot : bad_slots)
       if (slot_depth(slot) > 0) lower(slot);
     if (!progress) {
-      // Only elements at the floor offend: the floor configuration itself must be invalid.
+      // Only elements at the floor offend. Next to a fold of the surface that is sharper than
+      // the floor (a razor-thin fin, typically next to a folded vertex) the floor itself is too
+      // thick: lower the floors of the offenders' vertices, a bounded number of times each.
+      auto drop = [&](std::uint32_t v) {
+        if (lowered[v] || s.t[v] == 0 || !search.lower_floor(v, options.floor_drop,
+                                                              options.max_floor_drops))
+          return;
+        lowered[v] = 1;
+        s.t[v] = search.floor()[v];
+        ++out.floor_drops;
+        progress = true;
+      };
+      for (const auto& [f, g] : prism_pairs)
+        for (const std::uint32_t face : {f, g})
+          for (const std::uint32_t v : surface.triangles[face]) drop(v);
+      for (std::uint32_t t : bad_tets)
+        for (std::uint32_t p : out.shell.mesh.tets[t])
+          if (p >= n && p - n < n_slots)
+            for (std::uint32_t v : members[p - n]) drop(v);
+      for (std::uint32_t slot : bad_slots)
+        if (slot < n_slots)
+          for (std::uint32_t v : members[slot]) drop(v);
+    }
+    if (!progress) {
+      // The floors are as low as they go: the floor configuration itself must be invalid.
       const ShellInput in = search.build(search.floor_state(), members);
       const ShellCheckResult c = check_shell(surface, assemble_shell(surface, in, no_quality).mesh);
       out.floor_valid = c.valid();

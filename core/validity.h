@@ -22,8 +22,10 @@
 // folded vertex, with no such direction, stays on the surface: t_v = 0 throughout); an
 // offending element whose vertices are all at the floor is an element of that configuration,
 // which is impossible. So an offending element always has a vertex above its floor, and the
-// loop ends with no offending element. Should a round find only floor elements offending, the
-// floor configuration is checked and the run fails, naming what it broke.
+// loop ends with no offending element. The floor is "thin enough" only to first order: should a
+// round find only floor elements offending (a crease sharper than the floor), their floors are
+// divided by floor_drop (at most max_floor_drops times each) and the search goes on; after that
+// the floor configuration is checked and the run fails, naming what it broke.
 // Vertices that were never involved keep their full depth: the shell stays as thick as the
 // traces allow wherever it is already valid; the gentle shrink, applied locally until each
 // offence is gone, takes little more than needed from those that were (docs/validity.md).
@@ -45,7 +47,9 @@ namespace vdb_shell {
 struct ValidityOptions {
   double shrink = 0.85;         ///< factor applied to t_v of a moved-back vertex, in (0, 1)
   double floor_fraction = 0.02; ///< t_min_v = this * shortest incident edge (capped at full)
-  int max_rounds = 1000;        ///< safety net (rounds are cheap: most check volumes only)
+  double floor_drop = 0.25;     ///< factor on the floor of a vertex offending at its floor
+  int max_floor_drops = 4;      ///< at most this many floor drops per vertex
+  int max_rounds = 1000;        ///< safety net (rounds are cheap)
 };
 
 struct ValidShell {
@@ -58,6 +62,7 @@ struct ValidShell {
   std::size_t moved_back = 0;     ///< vertices whose final t_v is below their traced depth
   double moved_back_mean = 0;     ///< mean (traced - final) / traced over moved-back vertices
   std::size_t unwelded = 0;       ///< vertices that left their weld
+  std::size_t floor_drops = 0;    ///< floors lowered where the floor itself offended
   bool floor_valid = true;        ///< false: the search stalled and the floor failed too
   std::string floor_problems;     ///< what the floor configuration broke, when it did
   /// Folded surface vertices kept on the surface (inner_id kOnSurface, depth 0): their incident

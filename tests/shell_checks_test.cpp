@@ -72,6 +72,31 @@ std::size_t overlapping_pairs(const std::vector<Vec3d>& points, const std::vecto
 
 const Vec3d kA{0, 0, 0}, kB{1, 0, 0}, kC{0, 1, 0}, kD{0, 0, 1};
 
+TEST(ShellChecks, SelfIntersectionsOfTheSurface) {
+  // Every generated shape is embedded: nothing, although neighbours share edges and vertices.
+  for (const ShapeInfo& info : shape_catalog())
+    EXPECT_TRUE(surface_self_intersections(make_shape(info.name, 1), 10).empty()) << info.name;
+  // Two boxes, the second shifted by half a side, as one mesh: their faces cross.
+  SurfaceMesh two = make_shape("box", 1);
+  const SurfaceMesh box = two;
+  const auto n = static_cast<std::uint32_t>(two.points.size());
+  for (const Vec3d& p : box.points) two.points.push_back(p + Vec3d{0.3, 0.2, 0.1});
+  for (const Triangle& t : box.triangles) two.triangles.push_back({t[0] + n, t[1] + n, t[2] + n});
+  const auto pairs = surface_self_intersections(two, 1000);
+  ASSERT_FALSE(pairs.empty());
+  for (const auto& pair : pairs) {
+    EXPECT_LT(pair[0], box.triangles.size());  // one face of each box
+    EXPECT_GE(pair[1], box.triangles.size());
+  }
+  EXPECT_EQ(surface_self_intersections(two, 1).size(), 1u);
+  // Merely touching (the second box moved a whole side along x, sharing a face plane) is not
+  // crossing.
+  const double side = bounding_box(box).extent().x;
+  for (std::size_t i = 0; i < box.points.size(); ++i)
+    two.points[n + i] = box.points[i] + Vec3d{side, 0, 0};
+  EXPECT_TRUE(surface_self_intersections(two, 10).empty());
+}
+
 TEST(ShellChecks, ValidShellsReportNothing) {
   for (const auto& [name, detail] : {std::pair<const char*, int>{"box", 2}, {"sphere", 2},
                                      {"cylinder", 1}, {"torus", 1}}) {
