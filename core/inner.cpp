@@ -7,6 +7,7 @@
 #include <unordered_map>
 
 #include "core/errors.h"
+#include "core/point_index.h"
 
 namespace vdb_shell {
 
@@ -69,32 +70,18 @@ InnerVertices place_inner_vertices(const SurfaceMesh& mesh, const TraceResult& t
   std::vector<std::uint32_t> rep(n);
   for (std::uint32_t v = 0; v < n; ++v) rep[v] = v;
   if (tol > 0.0 && n > 0) {
-    struct Key {
-      std::int64_t i, j, k;
-      bool operator==(const Key& o) const { return i == o.i && j == o.j && k == o.k; }
-    };
-    struct Hash {
-      std::size_t operator()(const Key& c) const {
-        return static_cast<std::size_t>(c.i * 73856093LL ^ c.j * 19349663LL ^ c.k * 83492791LL);
-      }
-    };
-    auto key = [&](const Vec3d& p) {
-      return Key{static_cast<std::int64_t>(std::floor(p.x / tol)),
-                 static_cast<std::int64_t>(std::floor(p.y / tol)),
-                 static_cast<std::int64_t>(std::floor(p.z / tol))};
-    };
-    std::unordered_map<Key, std::vector<std::uint32_t>, Hash> reps;
+    std::unordered_map<GridCell, std::vector<std::uint32_t>, GridCellHash> reps;
     const double tol2 = tol * tol;
     for (std::uint32_t v = 0; v < n; ++v) {
       // Only trace ends weld: not the surface itself, and not points a thickness limit placed
       // mid-trace (welding could carry them past their limit).
       if (!weldable[v]) continue;
-      const Key c = key(ends[v]);
+      const GridCell c(ends[v], tol);
       std::uint32_t best = v;
       for (std::int64_t i = c.i - 1; i <= c.i + 1; ++i)
         for (std::int64_t j = c.j - 1; j <= c.j + 1; ++j)
           for (std::int64_t k = c.k - 1; k <= c.k + 1; ++k) {
-            const auto it = reps.find({i, j, k});
+            const auto it = reps.find(GridCell(i, j, k));
             if (it == reps.end()) continue;
             for (const std::uint32_t u : it->second) {
               if (u >= best) break;

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -34,6 +35,23 @@ class PointIndex {
 /// the cell size).
 using PointIndexFactory = std::function<std::unique_ptr<PointIndex>(
     const std::vector<Vec3d>& points, double radius)>;
+
+/// A cell of a uniform grid of cubes of side `side` (the one holding `p`), and its hash: the
+/// key of hash grids over points.
+struct GridCell {
+  std::int64_t i, j, k;
+  GridCell(std::int64_t i_, std::int64_t j_, std::int64_t k_) : i(i_), j(j_), k(k_) {}
+  GridCell(const Vec3d& p, double side)
+      : i(static_cast<std::int64_t>(std::floor(p.x / side))),
+        j(static_cast<std::int64_t>(std::floor(p.y / side))),
+        k(static_cast<std::int64_t>(std::floor(p.z / side))) {}
+  bool operator==(const GridCell& o) const { return i == o.i && j == o.j && k == o.k; }
+};
+struct GridCellHash {
+  std::size_t operator()(const GridCell& c) const {
+    return static_cast<std::size_t>(c.i * 73856093LL ^ c.j * 19349663LL ^ c.k * 83492791LL);
+  }
+};
 
 /// Uniform hash grid with cells of side `radius`.
 std::unique_ptr<PointIndex> make_hash_point_index(const std::vector<Vec3d>& points,
