@@ -773,7 +773,8 @@ std::vector<std::array<std::uint32_t, 2>> surface_self_intersections(const Surfa
     const std::array<Vec3d, 3> t = corners(surface, f);
     face_cells[f].resize(grid.cells_of_triangle(t, nullptr));
     grid.cells_of_triangle(t, face_cells[f].data());
-    for (const std::uint32_t c : face_cells[f]) cell_faces[c].push_back(static_cast<std::uint32_t>(f));
+    for (const std::uint32_t c : face_cells[f])
+      cell_faces[c].push_back(static_cast<std::uint32_t>(f));
   }
   // A triangle as a flat tet: triangle_crosses_tet() with the fourth corner on the third.
   std::vector<std::uint32_t> mark(n, UINT32_MAX);

@@ -87,7 +87,8 @@ class ShellSearch {
     for (std::size_t v = 0; v < n; ++v) ++group_size_[start.input.inner_id[v]];
     group_start_.assign(start.input.inner_points.size() + 1, 0);
     for (std::size_t v = 0; v < n; ++v) ++group_start_[start.input.inner_id[v] + 1];
-    for (std::size_t g = 0; g + 1 < group_start_.size(); ++g) group_start_[g + 1] += group_start_[g];
+    for (std::size_t g = 0; g + 1 < group_start_.size(); ++g)
+      group_start_[g + 1] += group_start_[g];
     group_items_.resize(n);
     {
       std::vector<std::uint32_t> fill(group_start_.begin(), group_start_.end() - 1);
@@ -231,7 +232,8 @@ class ShellSearch {
     double best_depth = 0;
     for (const std::uint32_t id : p.tets.tets[i]) {
       if (id < n) continue;
-      const std::uint32_t v = tri[std::find(p.ids.begin() + 3, p.ids.end(), id) - p.ids.begin() - 3];
+      const auto corner = std::find(p.ids.begin() + 3, p.ids.end(), id) - p.ids.begin() - 3;
+      const std::uint32_t v = tri[corner];
       const double d = s.welded[v] ? group_depth_[start_.input.inner_id[v]]
                                    : (s.t[v] > floor_[v] ? s.t[v] : 0.0);
       if (d > best_depth) {
