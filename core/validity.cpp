@@ -514,18 +514,13 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
         if (s.welded[v] || s.t[v] > search.floor()[v]) d = std::max(d, s.t[v]);
       return d;  // 0: every member at its floor, nothing to move
     };
-    auto lower = [&](std::uint32_t slot) {
-      for (std::uint32_t v : members[slot]) {
-        if (lowered[v]) continue;
-        lowered[v] = 1;
-        if (s.welded[v]) {
-          s.welded[v] = 0;
-          ++out.unwelded;
-        } else {
-          s.t[v] = std::max(search.floor()[v], s.t[v] * options.shrink);
-        }
-        progress = true;
-      }
+    auto lower = [&](std::uint32_t slot) {  // a welded slot leaves its weld whole
+      for (std::uint32_t v : members[slot])
+        if (!lowered[v])
+          out.unwelded += search.step_back(s, v, options.shrink, [&](std::uint32_t u) {
+            lowered[u] = 1;
+            progress = true;
+          });
     };
     for (std::uint32_t t : bad_tets) {
       std::uint32_t best = UINT32_MAX;
