@@ -16,6 +16,7 @@
 #include <openvdb/tools/Prune.h>
 #include <openvdb/tools/VolumeToMesh.h>
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <unistd.h>
 
@@ -445,29 +446,6 @@ void refine_with_neighbour_triangles(FloatGrid& sdf, const openvdb::Int32Grid& i
   });
 }
 
-struct Offsets26 {
-  std::array<std::array<int, 3>, 26> d{};
-  std::array<std::array<float, 3>, 26> n{};  ///< unit outward normals d / |d|
-};
-
-const Offsets26& offsets26() {
-  static const Offsets26 table = [] {
-    Offsets26 t;
-    int k = 0;
-    for (int x = -1; x <= 1; ++x)
-      for (int y = -1; y <= 1; ++y)
-        for (int z = -1; z <= 1; ++z) {
-          if (x == 0 && y == 0 && z == 0) continue;
-          const float len = std::sqrt(float(x * x + y * y + z * z));
-          t.d[k] = {x, y, z};
-          t.n[k] = {x / len, y / len, z / len};
-          ++k;
-        }
-    return t;
-  }();
-  return table;
-}
-
 // ---------------------------------------------------------------------------------------------
 // Interior fill by a closest-triangle wavefront (SdfMethod::kExactInterior).
 //
@@ -661,6 +639,22 @@ void gather_ids_block(const std::vector<LeafBits>& known, const std::array<std::
     }
 }
 
+/// Bit (sx * 3 + sy) * 3 + sz is set when `m` has a voxel in the halo of the leaf at offset
+/// 8 * (sx - 1, sy - 1, sz - 1): the one-voxel slab (edge, corner) of the leaf facing it.
+std::uint32_t touched_neighbours(const LeafBits& m) {
+  std::uint64_t any = 0;
+  for (std::uint64_t w : m) any |= w;
+  if (!any) return 0;
+  const std::uint64_t xs[3] = {m[0], any, m[7]};
+  constexpr std::uint64_t ys[3] = {0xffull, ~0ull, 0xffull << 56};
+  constexpr std::uint64_t zs[3] = {0x0101010101010101ull, ~0ull, 0x8080808080808080ull};
+  std::uint32_t out = 0;
+  for (int s = 0; s < 27; ++s) {
+    if (xs[s / 9] & ys[s / 3 % 3] & zs[s % 3]) out |= std::uint32_t(1) << s;
+  }
+  return out;
+}
+
 /// `masks` dilated by one voxel (26-neighbourhood), for every leaf.
 std::vector<LeafBits> dilate_bits(const LeafTable& table, const std::vector<LeafBits>& masks) {
   std::vector<LeafBits> out(masks.size());
@@ -733,17 +727,37 @@ void refine_by_neighbour_triangles(const LeafTable& table, const std::vector<Lea
         }
         off2.push_back((x * 12 + y) * 12 + z);
       }
+  // Per thread: a set of triangles that clears in O(1): triangle i is in it when
+  // stamp[i] == now.
+  struct TriangleSet {
+    std::vector<std::uint32_t> stamp;
+    std::uint32_t now = 0;
+    void clear() {
+      if (++now == 0) {
+        std::fill(stamp.begin(), stamp.end(), 0u);
+        now = 1;
+      }
+    }
+  };
+  tbb::enumerable_thread_specific<TriangleSet> sets([&] {
+    TriangleSet set;
+    set.stamp.assign(tris.size(), 0u);
+    return set;
+  });
   // Lowers phi at voxel (x, y, z) of a leaf to its distance to the distinct triangles among
-  // block[c + off[k]]; returns the smallest cosine between the voxel's triangle's normal and
-  // theirs (1 if none differ).
+  // block[c + off[k]]; with `angles`, returns the smallest cosine between the voxel's
+  // triangle's normal and theirs (1 if none differ or without `angles`).
   auto relax = [&](const std::vector<int>& off, const std::int32_t* block, int c, FloatLeaf& leaf,
-                   int x, int y, int z, std::vector<std::int32_t>& cand) {
+                   int x, int y, int z, bool angles, TriangleSet& listed,
+                   std::vector<std::int32_t>& cand) {
     const std::int32_t own = block[c];
+    listed.clear();
     cand.clear();
     for (int k : off) {
       const std::int32_t id = block[c + k];
-      if (id < 0 || id == own) continue;
-      if (std::find(cand.begin(), cand.end(), id) == cand.end()) cand.push_back(id);
+      if (id < 0 || id == own || listed.stamp[std::size_t(id)] == listed.now) continue;
+      listed.stamp[std::size_t(id)] = listed.now;
+      cand.push_back(id);
     }
     if (cand.empty()) return 1.0f;
     float* phi = leaf.buffer().data();
@@ -754,7 +768,7 @@ void refine_by_neighbour_triangles(const LeafTable& table, const std::vector<Lea
     float min_cos = 1.0f;
     for (std::int32_t id : cand) {
       best = std::min(best, point_triangle_distance2f(p, tris[std::size_t(id)]));
-      if (own >= 0) {
+      if (angles && own >= 0) {
         min_cos = std::min(min_cos, dot3(normals[std::size_t(own)].data(),
                                          normals[std::size_t(id)].data()));
       }
@@ -767,7 +781,8 @@ void refine_by_neighbour_triangles(const LeafTable& table, const std::vector<Lea
                     [&](const tbb::blocked_range<std::size_t>& range) {
     std::int32_t block[1000];
     std::vector<std::int32_t> cand;
-    cand.reserve(124);
+    cand.reserve(26);
+    TriangleSet& listed = sets.local();
     for (std::size_t li = range.begin(); li < range.end(); ++li) {
       if (!any_bit(seeds[li])) continue;
       gather_ids_block<1>(known, table.neighbours[li], ids, block);
@@ -775,7 +790,7 @@ void refine_by_neighbour_triangles(const LeafTable& table, const std::vector<Lea
         for (std::uint64_t bits = seeds[li][x]; bits; bits &= bits - 1) {
           const int b = __builtin_ctzll(bits), y = b >> 3, z = b & 7;
           const float c = relax(off1, block, ((x + 1) * 10 + y + 1) * 10 + z + 1,
-                                *table.leaves[li], x, y, z, cand);
+                                *table.leaves[li], x, y, z, true, listed, cand);
           if (c < kMedialNormalCos) medial[li][x] |= std::uint64_t(1) << b;
         }
     }
@@ -786,6 +801,7 @@ void refine_by_neighbour_triangles(const LeafTable& table, const std::vector<Lea
     std::vector<std::int32_t> block(12 * 12 * 12);
     std::vector<std::int32_t> cand;
     cand.reserve(124);
+    TriangleSet& listed = sets.local();
     for (std::size_t li = range.begin(); li < range.end(); ++li) {
       LeafBits todo = wide[li];
       for (int x = 0; x < 8; ++x) todo[x] &= known[li][x];
@@ -795,7 +811,7 @@ void refine_by_neighbour_triangles(const LeafTable& table, const std::vector<Lea
         for (std::uint64_t bits = todo[x]; bits; bits &= bits - 1) {
           const int b = __builtin_ctzll(bits), y = b >> 3, z = b & 7;
           relax(off2, block.data(), ((x + 2) * 12 + y + 2) * 12 + z + 2, *table.leaves[li], x,
-                y, z, cand);
+                y, z, false, listed, cand);
         }
     }
   });
@@ -857,11 +873,10 @@ void fill_interior_by_wavefront(FloatGrid& sdf, const openvdb::Int32Grid& index_
     }
   });
 
-  int off10[26];  // neighbour offsets in a 10^3 block
-  {
-    const Offsets26& off = offsets26();
-    for (int k = 0; k < 26; ++k) off10[k] = (off.d[k][0] * 10 + off.d[k][1]) * 10 + off.d[k][2];
-  }
+  // Offsets in a 10^3 block of the 27 voxels around one, indexed (a * 3 + b) * 3 + c for the
+  // offset (a - 1, b - 1, c - 1); candidates are listed in this order.
+  int off27[27];
+  for (int i = 0; i < 27; ++i) off27[i] = ((i / 9 - 1) * 10 + (i / 3 % 3 - 1)) * 10 + i % 3 - 1;
   const std::vector<LeafBits> seeds = known;
   std::vector<std::int32_t> active, previous;
   for (std::size_t i = 0; i < n; ++i) {
@@ -879,78 +894,99 @@ void fill_interior_by_wavefront(FloatGrid& sdf, const openvdb::Int32Grid& index_
       std::int32_t block[1000];
       for (std::size_t j = range.begin(); j < range.end(); ++j) {
         const std::size_t li = std::size_t(active[j]);
+        // The leaves of an iteration are far apart in memory and their triangles and distances
+        // were written iterations ago: fetching them a few leaves ahead hides most misses.
+        if (j + 3 < range.end()) {
+          const std::size_t lp = std::size_t(active[j + 3]);
+          const char* a = reinterpret_cast<const char*>(&ids[lp * 512]);
+          const char* b = reinterpret_cast<const char*>(table.leaves[lp]->buffer().data());
+          for (int k = 0; k < 2048; k += 64) {
+            __builtin_prefetch(a + k);
+            __builtin_prefetch(b + k);
+          }
+        }
         const std::array<std::int32_t, 27>& nb = table.neighbours[li];
         std::uint16_t halo[10][10];
         gather_halo_bits(fresh_in, nb, halo);
-        // Triangles of the voxels accepted last iteration, over the leaf and its halo.
-        std::fill(block, block + 1000, -1);
-        for (int hx = 0; hx < 10; ++hx)
-          for (int hy = 0; hy < 10; ++hy)
-            for (unsigned row = halo[hx][hy]; row; row &= row - 1) {
-              const int hz = __builtin_ctz(row);
-              const int x = hx - 1, y = hy - 1, z = hz - 1;
-              const std::int32_t ni =
-                  nb[(((x + 8) >> 3) * 3 + ((y + 8) >> 3)) * 3 + ((z + 8) >> 3)];
-              block[(hx * 10 + hy) * 10 + hz] =
-                  ids[std::size_t(ni) * 512 +
-                      std::size_t(((x & 7) << 6) | ((y & 7) << 3) | (z & 7))];
-            }
-        std::uint16_t grown[10][10];  // halo dilated along z
-        for (int x = 0; x < 10; ++x)
-          for (int y = 0; y < 10; ++y) {
-            const unsigned v = halo[x][y];
-            grown[x][y] = std::uint16_t(v | (v << 1) | (v >> 1));
-          }
         FloatLeaf& leaf = *table.leaves[li];
         float* phi = leaf.buffer().data();
         std::int32_t* own = &ids[li * 512];
         LeafBits& tn = tentative[li];
         const Coord origin = leaf.origin();
-        for (int x = 0; x < 8; ++x)
-          for (int y = 0; y < 8; ++y) {
-            unsigned near = 0;
-            for (int a = 0; a < 3; ++a)
-              for (int b = 0; b < 3; ++b) near |= grown[x + a][y + b];
-            unsigned front = (near >> 1) & unsigned(todo[li][x] >> (8 * y)) & 0xffu;
-            for (; front; front &= front - 1) {
-              const int z = __builtin_ctz(front);
-              const int pos = (x << 6) | (y << 3) | z;
-              const std::uint64_t bit = std::uint64_t(1) << ((y << 3) | z);
-              const bool has = (tn[x] & bit) != 0;
-              std::int32_t best_id = has ? own[pos] : -1;
-              float best = has ? (phi[pos] / h) * (phi[pos] / h)
-                               : std::numeric_limits<float>::max();
-              std::int32_t cand[26];
-              int nc = 0;
-              const int c = ((x + 1) * 10 + y + 1) * 10 + z + 1;
-              for (int k = 0; k < 26; ++k) {
-                const std::int32_t id = block[c + off10[k]];
-                if (id < 0 || id == best_id) continue;
-                bool seen = false;
-                for (int q = 0; q < nc; ++q) seen |= cand[q] == id;
-                if (!seen) cand[nc++] = id;
+        bool any_fresh = false;
+        for (int x = 0; x < 10; ++x)
+          for (int y = 0; y < 10; ++y) any_fresh |= halo[x][y] != 0;
+        // Without fresh voxels around, the leaf only accepts its pending tentative voxels.
+        if (any_fresh) {
+          // Triangles of the voxels accepted last iteration, over the leaf and its halo; only
+          // read where `halo` has a bit.
+          for (int hx = 0; hx < 10; ++hx)
+            for (int hy = 0; hy < 10; ++hy)
+              for (unsigned row = halo[hx][hy]; row; row &= row - 1) {
+                const int hz = __builtin_ctz(row);
+                const int x = hx - 1, y = hy - 1, z = hz - 1;
+                const std::int32_t ni =
+                    nb[(((x + 8) >> 3) * 3 + ((y + 8) >> 3)) * 3 + ((z + 8) >> 3)];
+                block[(hx * 10 + hy) * 10 + hz] =
+                    ids[std::size_t(ni) * 512 +
+                        std::size_t(((x & 7) << 6) | ((y & 7) << 3) | (z & 7))];
               }
-              if (nc == 0) continue;
-              const float p[3] = {float(origin[0] + x), float(origin[1] + y), float(origin[2] + z)};
-              // Candidates facing apart: wavefronts from different sides meet here.
-              const std::array<float, 3>& n0 = normals[std::size_t(has ? best_id : cand[0])];
-              for (int q = 0; q < nc; ++q) {
-                if (dot3(n0.data(), normals[std::size_t(cand[q])].data()) < kMedialNormalCos) {
-                  medial[li][x] |= bit;
+          for (int x = 0; x < 8; ++x)
+            for (int y = 0; y < 8; ++y) {
+              unsigned rows[9];
+              unsigned near = 0;
+              for (int a = 0; a < 3; ++a)
+                for (int b = 0; b < 3; ++b) {
+                  rows[a * 3 + b] = halo[x + a][y + b];
+                  near |= rows[a * 3 + b];
                 }
-              }
-              for (int q = 0; q < nc; ++q) {
-                const float d2 = point_triangle_distance2f(p, tris[std::size_t(cand[q])]);
-                if (d2 < best || (d2 == best && cand[q] < best_id)) {
-                  best = d2;
-                  best_id = cand[q];
+              near |= (near << 1) | (near >> 1);
+              unsigned front = (near >> 1) & unsigned(todo[li][x] >> (8 * y)) & 0xffu;
+              for (; front; front &= front - 1) {
+                const int z = __builtin_ctz(front);
+                const int pos = (x << 6) | (y << 3) | z;
+                const std::uint64_t bit = std::uint64_t(1) << ((y << 3) | z);
+                const bool has = (tn[x] & bit) != 0;
+                std::int32_t best_id = has ? own[pos] : -1;
+                float best = has ? (phi[pos] / h) * (phi[pos] / h)
+                                 : std::numeric_limits<float>::max();
+                // The fresh neighbours, bit (a * 3 + b) * 3 + c for offset (a-1, b-1, c-1); the
+                // voxel itself is never fresh (it is still to fill).
+                std::uint32_t around = 0;
+                for (int r = 0; r < 9; ++r) around |= ((rows[r] >> z) & 7u) << (3 * r);
+                std::int32_t cand[26];
+                int nc = 0;
+                const int c = ((x + 1) * 10 + y + 1) * 10 + z + 1;
+                for (; around; around &= around - 1) {
+                  const std::int32_t id = block[c + off27[__builtin_ctz(around)]];
+                  if (id == best_id) continue;
+                  bool seen = false;
+                  for (int q = 0; q < nc; ++q) seen |= cand[q] == id;
+                  if (!seen) cand[nc++] = id;
                 }
+                if (nc == 0) continue;
+                const float p[3] = {float(origin[0] + x), float(origin[1] + y),
+                                    float(origin[2] + z)};
+                // Candidates facing apart: wavefronts from different sides meet here.
+                const std::array<float, 3>& n0 = normals[std::size_t(has ? best_id : cand[0])];
+                for (int q = 0; q < nc; ++q) {
+                  if (dot3(n0.data(), normals[std::size_t(cand[q])].data()) < kMedialNormalCos) {
+                    medial[li][x] |= bit;
+                  }
+                }
+                for (int q = 0; q < nc; ++q) {
+                  const float d2 = point_triangle_distance2f(p, tris[std::size_t(cand[q])]);
+                  if (d2 < best || (d2 == best && cand[q] < best_id)) {
+                    best = d2;
+                    best_id = cand[q];
+                  }
+                }
+                own[pos] = best_id;
+                phi[pos] = -std::sqrt(best) * h;
+                tn[x] |= bit;
               }
-              own[pos] = best_id;
-              phi[pos] = -std::sqrt(best) * h;
-              tn[x] |= bit;
             }
-          }
+        }
         // Accept the tentative voxels below the limit.
         LeafBits accepted{};
         bool pending = false;
@@ -970,10 +1006,10 @@ void fill_interior_by_wavefront(FloatGrid& sdf, const openvdb::Int32Grid& index_
         }
         fresh_out[li] = accepted;
         if (pending) next_mark[li].store(1, std::memory_order_relaxed);
-        if (any_bit(accepted)) {
-          for (std::int32_t ni : nb) {
-            if (ni >= 0) next_mark[std::size_t(ni)].store(1, std::memory_order_relaxed);
-          }
+        // Wake the neighbours whose halo holds a voxel accepted here (the leaf itself included).
+        for (std::uint32_t t = touched_neighbours(accepted); t; t &= t - 1) {
+          const std::int32_t ni = nb[std::size_t(__builtin_ctz(t))];
+          if (ni >= 0) next_mark[std::size_t(ni)].store(1, std::memory_order_relaxed);
         }
       }
     });
@@ -1135,25 +1171,31 @@ void derive_fields(const FloatGrid& sdf, const GradientMap& gmap, double flux_mi
       const FloatLeaf& leaf = *leaves[li];
       const Coord origin = leaf.origin();
       const float* own = leaf.buffer().data();
+      // Bit loops over the mask's words: the interior is dense, and OpenVDB's mask iterators
+      // cost more than the flux itself there.
+      std::uint64_t on[8];
+      for (int w = 0; w < 8; ++w) on[w] = leaf.getValueMask().getWord<std::uint64_t>(w);
       std::size_t interior = 0;
       bool any_near = false;  // an active voxel with phi < phi_limit
-      for (auto it = leaf.getValueMask().beginOn(); it; ++it) {
-        interior += own[it.pos()] < 0.0f;
-        any_near |= own[it.pos()] < phi_limit;
+      for (int pos = 0; pos < 512; ++pos) {
+        const bool active = (on[pos >> 6] >> (pos & 63)) & 1u;
+        interior += active && own[pos] < 0.0f;
+        any_near |= active && own[pos] < phi_limit;
       }
       FloatLeaf* flux_leaf = nullptr;
       if (any_near || store_gradient) gather_block(acc, origin, phi.data());
       auto p_at = [&](int x, int y, int z) { return phi[(x * kBlock + y) * kBlock + z]; };
       if (any_near) {
         flux_of_block(phi.data(), flux, *scratch);
-        for (auto it = leaf.getValueMask().beginOn(); it; ++it) {
-          const openvdb::Index pos = it.pos();
-          if (!(own[pos] < phi_limit)) continue;
-          const float f = std::clamp(flux[pos] * inv_26h, -1.0f, 1.0f);
-          if (std::abs(f) < fmin) continue;
-          if (!flux_leaf) flux_leaf = new FloatLeaf(origin, 0.0f, false);
-          flux_leaf->setValueOn(pos, f);
-        }
+        for (int w = 0; w < 8; ++w)
+          for (std::uint64_t bits = on[w]; bits; bits &= bits - 1) {
+            const openvdb::Index pos = openvdb::Index(64 * w + __builtin_ctzll(bits));
+            if (!(own[pos] < phi_limit)) continue;
+            const float f = std::clamp(flux[pos] * inv_26h, -1.0f, 1.0f);
+            if (std::abs(f) < fmin) continue;
+            if (!flux_leaf) flux_leaf = new FloatLeaf(origin, 0.0f, false);
+            flux_leaf->setValueOn(pos, f);
+          }
       }
       out.flux[li] = flux_leaf;
       out.interior[li] = interior;
