@@ -73,6 +73,7 @@ struct CliOptions {
   FieldOptions fields;
   TraceOptions trace;
   ThicknessOptions thickness;
+  ValidityOptions validity;
 
   bool batch() const { return inputs.size() > 1; }
   bool show_progress() const { return !quiet && (progress || err_is_terminal); }
@@ -335,7 +336,7 @@ RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& 
   const InnerVertices inner = place_inner_vertices(mesh, traces, opt.thickness);
   const double t_inner = progress.stop();
   progress.start("validity");
-  const ValidShell valid = make_valid_shell(mesh, traces, inner);
+  const ValidShell valid = make_valid_shell(mesh, traces, inner, opt.validity);
   const AssembleResult& shell = valid.shell;
   const ShellCheckResult& checks = valid.checks;
   const QualitySummary quality = summarize_quality(mesh, shell.mesh);
@@ -623,6 +624,11 @@ int run_cli_impl(int argc, const char* const* argv, std::ostream& out, std::ostr
   app.add_option("--thickness-edge-factor", opt.thickness.edge_factor,
                  "K: limit each vertex to K x its mean incident edge length (0: no limit)")
       ->check(CLI::NonNegativeNumber)
+      ->group(th);
+  app.add_option("--min-quality", opt.validity.min_quality,
+                 "Step inner vertices back from tets of a lower volume-length quality, where they "
+                 "can move (0: only from inverted ones)")
+      ->check(CLI::Range(0.0, 0.5))
       ->group(th);
 
   const char* og = "Output";

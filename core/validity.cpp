@@ -2,6 +2,8 @@
 // validity.h for the method and why it terminates.
 #include "core/validity.h"
 
+#include "core/quality.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -268,10 +270,12 @@ class ShellSearch {
 
   /// Steps back, as a round does for an inverted or flat tet (its deepest movable inner corner),
   /// until every tet of the prisms in `queue`, and of the prisms around every vertex moved on
-  /// the way, is positive or has all its inner corners at their floor (left to the checks).
+  /// the way, is positive with a quality of at least `min_quality`, or has all its inner
+  /// corners at their floor (left to the checks; a sliver there is no violation).
   /// Local and serial. Marks the moved vertices in `lowered`; returns how many left their weld.
   std::size_t settle_volumes(State& s, std::vector<std::uint32_t> queue, double shrink,
-                             double zero_volume_tolerance, std::vector<char>& lowered) const {
+                             double zero_volume_tolerance, double min_quality,
+                             std::vector<char>& lowered) const {
     std::vector<char> queued(surface_.triangles.size(), 0);
     for (std::uint32_t f : queue) queued[f] = 1;
     auto moved = [&](std::uint32_t v) {
@@ -288,7 +292,10 @@ class ShellSearch {
       queued[f] = 0;
       const LocalPrism p = prism(s, f);
       for (int i = 0; i < p.tets.count; ++i) {
-        if (tet_volume_class(p.corners(i), zero_volume_tolerance) == 0) continue;
+        const std::array<Vec3d, 4> c = p.corners(i);
+        if (tet_volume_class(c, zero_volume_tolerance) == 0 &&
+            !(tet_quality(c[0], c[1], c[2], c[3]) < min_quality))
+          continue;
         const std::uint32_t v = deepest_corner(s, p, i);
         if (v == UINT32_MAX) continue;  // at the floor: left to the checks
         unwelded += step_back(s, v, shrink, moved);
@@ -304,7 +311,7 @@ class ShellSearch {
   /// vertices in `lowered`; returns how many left their weld.
   std::size_t settle_overlaps(State& s, const std::vector<std::array<std::uint32_t, 2>>& pairs,
                               double shrink, const ShellCheckOptions& options,
-                              std::vector<char>& lowered) const {
+                              double min_quality, std::vector<char>& lowered) const {
     std::size_t unwelded = 0;
     std::vector<std::uint32_t> step, around, moved;
     for (const auto& [f, g] : pairs) {
@@ -334,7 +341,8 @@ class ShellSearch {
         }
         std::sort(around.begin(), around.end());
         around.erase(std::unique(around.begin(), around.end()), around.end());
-        unwelded += settle_volumes(s, around, shrink, options.zero_volume_tolerance, lowered);
+        unwelded += settle_volumes(s, around, shrink, options.zero_volume_tolerance, min_quality,
+                                   lowered);
       }
     }
     return unwelded;
@@ -488,7 +496,8 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
   for (;; ++out.rounds) {
     // Inverted and flat tets are local: settle them prism by prism before a round.
     out.unwelded += search.settle_volumes(s, seeds, options.shrink,
-                                          check_options.zero_volume_tolerance, lowered);
+                                          check_options.zero_volume_tolerance,
+                                          options.min_quality, lowered);
     out.input = search.build(s, members);
     out.shell = assemble_shell(surface, out.input, no_quality);
     out.checks = check(out.shell.mesh);
@@ -504,7 +513,8 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
     }
     std::sort(prism_pairs.begin(), prism_pairs.end());
     prism_pairs.erase(std::unique(prism_pairs.begin(), prism_pairs.end()), prism_pairs.end());
-    out.unwelded += search.settle_overlaps(s, prism_pairs, options.shrink, check_options, lowered);
+    out.unwelded += search.settle_overlaps(s, prism_pairs, options.shrink, check_options,
+                                           options.min_quality, lowered);
     bool progress = std::find(lowered.begin(), lowered.end(), 1) != lowered.end();
     const auto n_slots = static_cast<std::uint32_t>(out.input.inner_points.size());
     auto slot_depth = [&](std::uint32_t slot) {

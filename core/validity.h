@@ -46,6 +46,9 @@ namespace vdb_shell {
 
 struct ValidityOptions {
   double shrink = 0.85;         ///< factor applied to t_v of a moved-back vertex, in (0, 1)
+  /// Tets of a lower volume-length quality are settled like inverted ones (stepped back while a
+  /// corner can move; a sliver left at the floor is no violation). 0: volumes only.
+  double min_quality = 1e-3;
   double floor_fraction = 0.02; ///< t_min_v = this * shortest incident edge (capped at full)
   double floor_drop = 0.25;     ///< factor on the floor of a vertex offending at its floor
   int max_floor_drops = 4;      ///< at most this many floor drops per vertex

@@ -139,6 +139,13 @@ const std::vector<ReportCase>& report_cases() {
          EXPECT_NEAR(24.0 * h24, 32.0 * h32, 1e-9);
          EXPECT_LT(j["fields"]["sdf_active_voxels"], b["fields"]["sdf_active_voxels"]);
        }},
+      {"--min-quality", {"--min-quality", "0"},
+       [](const json& b, const json& j) {  // the default 1e-3 steps back from slivers
+         EXPECT_GE(b["quality"]["min"].get<double>(), 1e-3);
+         EXPECT_LT(j["quality"]["min"].get<double>(), 1e-3);
+         EXPECT_LT(j["validity"]["moved_back_vertices"], b["validity"]["moved_back_vertices"]);
+         EXPECT_GT(j["shell"]["coverage"], b["shell"]["coverage"]);
+       }},
       {"--voxel-size", {"--voxel-size", "0.05"},
        [](const json& b, const json& j) {
          EXPECT_NEAR(j["fields"]["voxel_size"].get<double>(), 0.05, 1e-12);
@@ -148,7 +155,7 @@ const std::vector<ReportCase>& report_cases() {
   return cases;
 }
 
-TEST_F(CliOptionEffects, ReportShowsEveryFieldAndTracingOption) {
+TEST_F(CliOptionEffects, ReportShowsEveryFieldTracingAndShellOption) {
   for (const ReportCase& c : report_cases()) {
     SCOPED_TRACE(c.option);
     std::vector<std::string> args = {star(), "-o", file("s.vtu")};
