@@ -95,8 +95,9 @@ AssembleResult assemble_shell(const SurfaceMesh& surface, const ShellInput& inpu
     throw InputError("assemble_shell: " + std::to_string(input.inner_id.size()) +
                      " inner ids for " + std::to_string(n_surface) +
                      " surface vertices; give one inner id per surface vertex");
-  if (n_surface + n_inner + input.cap_points.size() > std::numeric_limits<std::uint32_t>::max())
-    throw InputError("assemble_shell: " + std::to_string(n_surface + n_inner) +
+  const std::size_t n_points = n_surface + n_inner + input.cap_points.size();
+  if (n_points > std::numeric_limits<std::uint32_t>::max())
+    throw InputError("assemble_shell: " + std::to_string(n_points) +
                      " points do not fit 32-bit indices");
   for (std::size_t v = 0; v < n_surface; ++v)
     if (input.inner_id[v] >= n_inner && input.inner_id[v] != kOnSurface)
