@@ -2,13 +2,13 @@
 // validity.h for the method and why it terminates.
 #include "core/validity.h"
 
-#include "core/quality.h"
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
 #include <numeric>
+
+#include "core/quality.h"
 
 namespace vdb_shell {
 namespace {
@@ -43,16 +43,26 @@ Vec3d most_inward_direction(const std::vector<Vec3d>& normals, Vec3d start) {
 /// face plane) are bent towards the most inward direction.
 constexpr double kMinMargin = 0.1;
 
-/// The surface vertices of every inner vertex (slot), in increasing order.
-struct Members {
-  std::vector<std::uint32_t> start, items;  ///< slot i: items[start[i] .. start[i + 1])
+/// Lists of indices per key in one array: key k's are items[start[k] .. start[k + 1]).
+struct Lists {
+  std::vector<std::uint32_t> start, items;
   struct Range {
     const std::uint32_t *b, *e;
     const std::uint32_t* begin() const { return b; }
     const std::uint32_t* end() const { return e; }
   };
-  Range operator[](std::uint32_t slot) const {
-    return {items.data() + start[slot], items.data() + start[slot + 1]};
+  Range operator[](std::uint32_t k) const {
+    return {items.data() + start[k], items.data() + start[k + 1]};
+  }
+  /// From pairs(emit), which calls emit(key, item) for every item, in the order to keep.
+  template <class Pairs>
+  void build(std::size_t keys, const Pairs& pairs) {
+    start.assign(keys + 1, 0);
+    pairs([&](std::uint32_t k, std::uint32_t) { ++start[k + 1]; });
+    for (std::size_t k = 0; k < keys; ++k) start[k + 1] += start[k];
+    items.resize(start.back());
+    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+    pairs([&](std::uint32_t k, std::uint32_t item) { items[fill[k]++] = item; });
   }
 };
 
@@ -85,27 +95,13 @@ class ShellSearch {
         floor_[tri[(k + 1) % 3]] = std::min(floor_[tri[(k + 1) % 3]], l);
       }
     }
-    group_size_.assign(n, 0);
-    for (std::size_t v = 0; v < n; ++v) ++group_size_[start.input.inner_id[v]];
-    group_start_.assign(start.input.inner_points.size() + 1, 0);
-    for (std::size_t v = 0; v < n; ++v) ++group_start_[start.input.inner_id[v] + 1];
-    for (std::size_t g = 0; g + 1 < group_start_.size(); ++g)
-      group_start_[g + 1] += group_start_[g];
-    group_items_.resize(n);
-    {
-      std::vector<std::uint32_t> fill(group_start_.begin(), group_start_.end() - 1);
-      for (std::uint32_t v = 0; v < n; ++v) group_items_[fill[start.input.inner_id[v]]++] = v;
-    }
-    face_start_.assign(n + 1, 0);
-    for (const Triangle& tri : surface.triangles)
-      for (std::uint32_t v : tri) ++face_start_[v + 1];
-    for (std::size_t v = 0; v < n; ++v) face_start_[v + 1] += face_start_[v];
-    face_items_.resize(face_start_.back());
-    {
-      std::vector<std::uint32_t> fill(face_start_.begin(), face_start_.end() - 1);
+    groups_.build(start.input.inner_points.size(), [&](const auto& emit) {
+      for (std::uint32_t v = 0; v < n; ++v) emit(start.input.inner_id[v], v);
+    });
+    faces_.build(n, [&](const auto& emit) {
       for (std::uint32_t f = 0; f < surface.triangles.size(); ++f)
-        for (std::uint32_t v : surface.triangles[f]) face_items_[fill[v]++] = f;
-    }
+        for (std::uint32_t v : surface.triangles[f]) emit(v, f);
+    });
     std::vector<std::vector<Vec3d>> face_normals(n);
     for (std::size_t f = 0; f < surface.triangles.size(); ++f)
       for (std::uint32_t v : surface.triangles[f])
@@ -159,16 +155,18 @@ class ShellSearch {
     State s;
     s.t = full_;
     s.welded.resize(full_.size());
-    for (std::size_t v = 0; v < full_.size(); ++v)
-      s.welded[v] = group_size_[start_.input.inner_id[v]] > 1 && start_.arc[v] >= floor_[v];
+    for (std::uint32_t v = 0; v < full_.size(); ++v) {
+      const auto group = groups_[start_.input.inner_id[v]];
+      s.welded[v] = group.end() - group.begin() > 1 && start_.arc[v] >= floor_[v];
+    }
     for (std::uint32_t v : folded_) {
       s.t[v] = 0;
       s.welded[v] = 0;
     }
     // A weld group is one slot, ordered by its smallest welded member, until it unwelds whole.
     // Its depth, the deepest welded member's, holds as long: welded members do not move.
-    group_key_.assign(group_start_.size() - 1, UINT32_MAX);
-    group_depth_.assign(group_start_.size() - 1, 0.0);
+    group_key_.assign(groups_.start.size() - 1, UINT32_MAX);
+    group_depth_.assign(groups_.start.size() - 1, 0.0);
     for (std::uint32_t v = static_cast<std::uint32_t>(full_.size()); v-- > 0;)
       if (s.welded[v]) {
         const std::uint32_t g = start_.input.inner_id[v];
@@ -257,9 +255,7 @@ class ShellSearch {
       return 0;
     }
     std::size_t unwelded = 0;
-    const std::uint32_t g = start_.input.inner_id[v];
-    for (std::uint32_t j = group_start_[g]; j < group_start_[g + 1]; ++j) {
-      const std::uint32_t u = group_items_[j];
+    for (const std::uint32_t u : groups_[start_.input.inner_id[v]]) {
       if (!s.welded[u]) continue;
       s.welded[u] = 0;
       ++unwelded;
@@ -280,10 +276,10 @@ class ShellSearch {
     for (std::uint32_t f : queue) queued[f] = 1;
     auto moved = [&](std::uint32_t v) {
       lowered[v] = 1;
-      for (std::uint32_t i = face_start_[v]; i < face_start_[v + 1]; ++i)
-        if (!queued[face_items_[i]]) {
-          queued[face_items_[i]] = 1;
-          queue.push_back(face_items_[i]);
+      for (const std::uint32_t f : faces_[v])
+        if (!queued[f]) {
+          queued[f] = 1;
+          queue.push_back(f);
         }
     };
     std::size_t unwelded = 0;
@@ -335,8 +331,7 @@ class ShellSearch {
           unwelded += step_back(s, v, shrink, [&](std::uint32_t u) {
             lowered[u] = 1;
             moved.push_back(u);
-            around.insert(around.end(), face_items_.begin() + face_start_[u],
-                          face_items_.begin() + face_start_[u + 1]);
+            around.insert(around.end(), faces_[u].begin(), faces_[u].end());
           });
         }
         std::sort(around.begin(), around.end());
@@ -366,8 +361,7 @@ class ShellSearch {
   void faces_around(const std::vector<char>& flags, std::vector<std::uint32_t>& out) const {
     out.clear();
     for (std::uint32_t v = 0; v < flags.size(); ++v)
-      if (flags[v]) out.insert(out.end(), face_items_.begin() + face_start_[v],
-                               face_items_.begin() + face_start_[v + 1]);
+      if (flags[v]) out.insert(out.end(), faces_[v].begin(), faces_[v].end());
     std::sort(out.begin(), out.end());
     out.erase(std::unique(out.begin(), out.end()), out.end());
   }
@@ -389,7 +383,7 @@ class ShellSearch {
   }
 
   /// Inner vertices of `s` (slots in order of their smallest member) and each slot's members.
-  ShellInput build(const State& s, Members& members) const {
+  ShellInput build(const State& s, Lists& members) const {
     const std::size_t n = full_.size();
     ShellInput in;
     in.inner_id.resize(n);
@@ -412,15 +406,10 @@ class ShellSearch {
     }
     in.cap_faces = caps_.cap_faces;
     in.cap_points = caps_.cap_points;
-    members.start.assign(in.inner_points.size() + 1, 0);
-    for (const std::uint32_t slot : in.inner_id)
-      if (slot != kOnSurface) ++members.start[slot + 1];
-    for (std::size_t i = 1; i < members.start.size(); ++i)
-      members.start[i] += members.start[i - 1];
-    members.items.resize(members.start.back());
-    std::vector<std::uint32_t> fill(members.start.begin(), members.start.end() - 1);
-    for (std::uint32_t v = 0; v < n; ++v)
-      if (in.inner_id[v] != kOnSurface) members.items[fill[in.inner_id[v]]++] = v;
+    members.build(in.inner_points.size(), [&](const auto& emit) {
+      for (std::uint32_t v = 0; v < n; ++v)
+        if (in.inner_id[v] != kOnSurface) emit(in.inner_id[v], v);
+    });
     return in;
   }
 
@@ -430,11 +419,10 @@ class ShellSearch {
   const InnerVertices& start_;
   std::vector<double> full_, floor_;
   std::vector<Vec3d> fallback_, correction_;
-  std::vector<std::uint32_t> group_size_;
-  std::vector<std::uint32_t> group_start_, group_items_;  ///< weld group -> its vertices
+  Lists groups_;                          ///< start weld group -> its vertices
   std::vector<std::uint32_t> group_key_;  ///< per group: its smallest welded vertex (initial)
   std::vector<double> group_depth_;       ///< per group: its welded members' largest depth
-  std::vector<std::uint32_t> face_start_, face_items_;    ///< vertex -> its faces
+  Lists faces_;                           ///< vertex -> its faces
   std::vector<std::uint32_t> folded_;  ///< on the surface throughout (t_v = 0)
   std::vector<int> drops_;             ///< per vertex: how often its floor was lowered
   ShellInput caps_;                    ///< cap_faces and cap_points only
@@ -472,7 +460,7 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
   const std::uint32_t n = static_cast<std::uint32_t>(surface.points.size());
   ShellSearch search(surface, traces, start, options);
   ValidShell out;
-  Members members;
+  Lists members;  ///< slot -> its surface vertices
   AssembleOptions no_quality;
   no_quality.compute_quality = false;
 
