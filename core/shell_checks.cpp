@@ -740,12 +740,12 @@ std::string format_list(const std::vector<std::uint32_t>& list) {
 
 }  // namespace
 
-int tet_volume_class(const std::array<Vec3d, 4>& p, double zero_volume_tolerance) {
+TetVolume tet_volume_class(const std::array<Vec3d, 4>& p, double zero_volume_tolerance) {
   double l = 0.0;
   for (const auto& e : kTetEdge) l = std::max(l, distance(p[e[0]], p[e[1]]));
   const double vol = tet_volume(p[0], p[1], p[2], p[3]);
-  if (std::abs(vol) <= zero_volume_tolerance * l * l * l) return 2;
-  return vol < 0.0 ? 1 : 0;
+  if (std::abs(vol) <= zero_volume_tolerance * l * l * l) return TetVolume::kZero;
+  return vol < 0.0 ? TetVolume::kInverted : TetVolume::kPositive;
 }
 
 std::vector<std::array<std::uint32_t, 2>> surface_self_intersections(const SurfaceMesh& surface,
@@ -776,7 +776,7 @@ std::vector<std::array<std::uint32_t, 2>> surface_self_intersections(const Surfa
     for (const std::uint32_t c : face_cells[f])
       cell_faces[c].push_back(static_cast<std::uint32_t>(f));
   }
-  // A triangle as a flat tet: triangle_crosses_tet() with the fourth corner on the third.
+  const double tolerance = ShellCheckOptions{}.overlap_tolerance;  // relative, as for tets
   std::vector<std::uint32_t> mark(n, UINT32_MAX);
   for (std::uint32_t f = 0; f < n && out.size() < max_listed; ++f) {
     const std::array<Vec3d, 3> a = corners(surface, f);
@@ -791,7 +791,7 @@ std::vector<std::array<std::uint32_t, 2>> surface_self_intersections(const Surfa
           shared += (u == tb[0]) + (u == tb[1]) + (u == tb[2]);
         if (shared >= 2) continue;  // neighbours across an edge only touch (2-manifold)
         const std::array<Vec3d, 3> b = corners(surface, g);
-        const double tol = 1e-9 * std::max({distance(a[0], a[1]), distance(a[1], a[2]),
+        const double tol = tolerance * std::max({distance(a[0], a[1]), distance(a[1], a[2]),
                                             distance(a[2], a[0]), distance(b[0], b[1]),
                                             distance(b[1], b[2]), distance(b[2], b[0])});
         if (triangles_cross(a, b, tol) && out.size() < max_listed) out.push_back({f, g});
@@ -811,24 +811,23 @@ namespace {
 void count_volumes(const TetMesh& mesh, const ShellCheckOptions& options,
                    ShellCheckResult& result) {
   const std::size_t max_listed = options.max_listed;
-  // 0 positive, 1 inverted, 2 zero-volume.
-  std::vector<std::uint8_t> sign(mesh.tets.size(), 0);
+  std::vector<TetVolume> sign(mesh.tets.size(), TetVolume::kPositive);
   for_each_chunk(
       mesh.tets.size(),
       [&](std::size_t begin, std::size_t end) {
         for (std::size_t t = begin; t != end; ++t) {
           const Tet& v = mesh.tets[t];
-          sign[t] = static_cast<std::uint8_t>(tet_volume_class(
+          sign[t] = tet_volume_class(
               {mesh.points[v[0]], mesh.points[v[1]], mesh.points[v[2]], mesh.points[v[3]]},
-              options.zero_volume_tolerance));
+              options.zero_volume_tolerance);
         }
       },
       4096);
   for (std::size_t t = 0; t < sign.size(); ++t) {
-    if (sign[t] == 1) {
+    if (sign[t] == TetVolume::kInverted) {
       ++result.inverted_tets;
       list_item(result.first_inverted_tets, max_listed, t);
-    } else if (sign[t] == 2) {
+    } else if (sign[t] == TetVolume::kZero) {
       ++result.zero_volume_tets;
       list_item(result.first_zero_volume_tets, max_listed, t);
     }

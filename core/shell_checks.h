@@ -115,8 +115,9 @@ ShellCheckResult check_shell(const SurfaceMesh& surface, const TetMesh& mesh,
 /// stay 0): the cheap first test of a candidate shell. \pre every tet index is in range.
 ShellCheckResult check_volumes(const TetMesh& mesh, const ShellCheckOptions& options = {});
 
-/// The volume test of check_volumes() for one tet: 0 positive, 1 inverted, 2 zero-volume.
-int tet_volume_class(const std::array<Vec3d, 4>& p, double zero_volume_tolerance);
+/// The volume test of check_volumes() for one tet.
+enum class TetVolume : std::uint8_t { kPositive, kInverted, kZero };
+TetVolume tet_volume_class(const std::array<Vec3d, 4>& p, double zero_volume_tolerance);
 
 /// The overlap test of check_shell() for one pair of tets (options.overlap_tolerance).
 bool tets_overlap(const std::array<Vec3d, 4>& a, const std::array<Vec3d, 4>& b,

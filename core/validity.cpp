@@ -289,7 +289,7 @@ class ShellSearch {
       const LocalPrism p = prism(s, f);
       for (int i = 0; i < p.tets.count; ++i) {
         const std::array<Vec3d, 4> c = p.corners(i);
-        if (tet_volume_class(c, zero_volume_tolerance) == 0 &&
+        if (tet_volume_class(c, zero_volume_tolerance) == TetVolume::kPositive &&
             !(tet_quality(c[0], c[1], c[2], c[3]) < min_quality))
           continue;
         const std::uint32_t v = deepest_corner(s, p, i);
