@@ -416,7 +416,12 @@ RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& 
   j["fields"] = {{"voxel_size", fields->voxel_size()},
                  {"strategy", fields->stats().strategy},
                  {"sdf_active_voxels", fields->stats().sdf_active_voxels},
-                 {"flux_active_voxels", fields->stats().flux_active_voxels}};
+                 {"flux_active_voxels", fields->stats().flux_active_voxels},
+                 {"seconds", {{"sdf", fields->stats().seconds_sdf},
+                              {"interior", fields->stats().seconds_fill +
+                                               fields->stats().seconds_refine},
+                              {"flux", fields->stats().seconds_flux},
+                              {"gradient", fields->stats().seconds_gradient}}}};
   j["trace"] = {{"step", traces.parameters.step},
                 {"point_size", traces.parameters.point_size},
                 {"integrator", to_string(opt.trace.integrator)},

@@ -124,6 +124,31 @@ TEST(FieldsSphere, DistanceWithinHalfVoxelEverywhereInside) {
   EXPECT_EQ(fields.stats().interior_voxels, negative);
 }
 
+TEST(FieldsSphere, ExteriorBandIsThreeVoxelsWide) {
+  // The wavefront widens OpenVDB's 2-voxel seed band to the exterior band; beyond it, phi is the
+  // background (kExteriorBandVoxels voxels).
+  const Fields& fields = sphere_fields();
+  const double h = fields.voxel_size();
+  double worst = 0.0;
+  std::size_t in_band = 0, beyond = 0, not_clamped = 0;
+  for_each_voxel(fields, [&](int i, int j, int k) {
+    const double d = norm(fields.voxel_center(i, j, k)) - kRadius;
+    const double phi = fields.phi_at_voxel(i, j, k);
+    if (d > 0.0 && d < (kExteriorBandVoxels - 0.5) * h) {
+      ++in_band;
+      worst = std::max(worst, std::abs(phi - d));
+    } else if (d > (kExteriorBandVoxels + 0.5) * h) {
+      ++beyond;
+      if (phi != float(kExteriorBandVoxels * h)) ++not_clamped;
+    }
+  });
+  EXPECT_GT(in_band, 100000u);
+  EXPECT_GT(beyond, 0u);
+  EXPECT_LT(worst, 0.1 * h) << "worst |phi - (|x| - R)| in the exterior band = " << worst / h
+                            << " voxels";
+  EXPECT_EQ(not_clamped, 0u);
+}
+
 TEST(FieldsSphere, WavefrontInteriorMatchesMeshToVolumeInterior) {
   // Both methods store distances to a closest triangle of the same mesh; OpenVDB's own interior
   // expansion plus refinement is the reference for the wavefront fill.

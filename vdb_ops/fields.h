@@ -57,13 +57,13 @@ inline constexpr double kExteriorBandVoxels = 3.0;
 
 /// How the filled signed distance field is computed from a mesh.
 enum class SdfMethod {
-  /// The default. OpenVDB meshToVolume narrow band (3 voxels each side) with its closest-polygon
-  /// grid, then a closest-triangle wavefront into the interior: every interior voxel takes the
-  /// closest of the triangles its 26 neighbours took, voxels accepted in order of distance (one
-  /// voxel per iteration); then the band's voxels try their neighbours' triangles and voxels near
-  /// medial surfaces those of their 5^3 neighbourhood. Sphere of radius 64 voxels: max error 0.05
-  /// voxels. Measured (tests/bench/fields_bench.cpp, all fields): 2.0-3.4x OpenVDB's narrow band
-  /// alone at 512^3, 3-5x at 1024^3 (the interior grows as N^3, the band as N^2).
+  /// The default. OpenVDB meshToVolume's voxelization (the voxels within 2 of the surface) with
+  /// its closest-polygon grid, then a closest-triangle wavefront into the interior and out to the
+  /// exterior band: every voxel takes the closest of the triangles its 26 neighbours took, voxels
+  /// accepted in order of distance (one voxel per iteration); then voxels near medial surfaces
+  /// try the triangles of their 5^3 neighbourhood. Sphere of radius 64 voxels: max error 0.06
+  /// voxels (the polygonal sphere's own). Measured (tests/bench, all fields): see
+  /// docs/benchmarks.md, "Field build against OpenVDB's narrow-band floor".
   kExactInterior,
   /// OpenVDB meshToVolume with an unbounded interior band (its own layer-by-layer closest-polygon
   /// expansion), then one pass in which every voxel also tries the triangles its 26 neighbours
