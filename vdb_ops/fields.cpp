@@ -1041,21 +1041,23 @@ void fill_by_wavefront(FloatGrid& sdf, const openvdb::Int32Grid& index_grid, con
               }
             }
         }
-        // Accept the tentative voxels below the limit.
+        // Accept the tentative voxels below the limit; those outside the exterior band are
+        // final too, but dropped: they never become fresh, so the front stops there.
         LeafBits accepted{};
         bool pending = false;
         for (int x = 0; x < 8; ++x) {
+          std::uint64_t dropped = 0;
           for (std::uint64_t bits = tn[x]; bits; bits &= bits - 1) {
             const int b = __builtin_ctzll(bits);
             const float d = phi[(x << 6) | b] / h;
             if (d * d < limit2) {
-              accepted[x] |= std::uint64_t(1) << b;
+              (d >= exterior_voxels ? dropped : accepted[x]) |= std::uint64_t(1) << b;
             } else {
               pending = true;
             }
           }
-          tn[x] &= ~accepted[x];
-          todo[li][x] &= ~accepted[x];
+          tn[x] &= ~(accepted[x] | dropped);
+          todo[li][x] &= ~(accepted[x] | dropped);
           known[li][x] |= accepted[x];
         }
         fresh_out[li] = accepted;
@@ -1084,7 +1086,8 @@ void fill_by_wavefront(FloatGrid& sdf, const openvdb::Int32Grid& index_grid, con
     }
   }
   refine_by_neighbour_triangles(table, known, seeds, std::move(medial), ids.get(), tris, h);
-  // Outside, only the exterior band stays active; then the background becomes its width.
+  // Outside, only the exterior band stays active (the voxels the front accepted below its width);
+  // then the background becomes that width.
   const float exterior = exterior_voxels * h;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 64),
                     [&](const tbb::blocked_range<std::size_t>& range) {
