@@ -14,7 +14,6 @@
 #include <openvdb/tools/FastSweeping.h>
 #include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/MeshToVolume.h>
-#include <openvdb/tools/Morphology.h>
 #include <openvdb/tools/Prune.h>
 #include <openvdb/tools/VolumeToMesh.h>
 #include <tbb/blocked_range.h>
@@ -869,12 +868,19 @@ void fill_by_wavefront(FloatGrid& sdf, const openvdb::Int32Grid& index_grid, con
   const std::int32_t n_tris = std::int32_t(tris.size());
   const float h = float(sdf.voxelSize()[0]);
   const float seed_band = kSeedBandVoxels * h;
-  // The voxel nearest a surface point is within sqrt(3) / 2 of it, a seed; a voxel within
-  // `exterior_voxels` of that point is within ceil(exterior_voxels) steps of 26 neighbours of
-  // that seed: so many dilations of the seeds hold every voxel of the exterior band.
-  openvdb::tools::dilateActiveValues(sdf.tree(), int(std::ceil(exterior_voxels)),
-                                     openvdb::tools::NN_FACE_EDGE_VERTEX,
-                                     openvdb::tools::IGNORE_TILES);
+  // Every voxel within `exterior_voxels` (< 8) of the surface is in a seed's leaf or one of its
+  // 26 neighbours: the front fills those leaves' outside voxels too and stops at that width.
+  {
+    std::vector<Coord> origins;
+    origins.reserve(sdf.tree().leafCount());
+    for (auto it = sdf.tree().cbeginLeaf(); it; ++it) origins.push_back(it->origin());
+    openvdb::tree::ValueAccessor<FloatTree> acc(sdf.tree());
+    for (const Coord& o : origins) {
+      for (int s = 0; s < 27; ++s) {
+        acc.touchLeaf(o.offsetBy(8 * (s / 9 - 1), 8 * (s / 3 % 3 - 1), 8 * (s % 3 - 1)));
+      }
+    }
+  }
   activate_interior(sdf.tree());
   const LeafTable table = make_leaf_table(sdf.tree());
   const std::size_t n = table.leaves.size();
@@ -893,7 +899,7 @@ void fill_by_wavefront(FloatGrid& sdf, const openvdb::Int32Grid& index_grid, con
       const openvdb::Int32Tree::LeafNodeType* il = acc.probeConstLeaf(leaf.origin());
       LeafBits dn{}, td{}, out{};
       for (int w = 0; w < 8; ++w) {
-        td[w] = leaf.getValueMask().getWord<std::uint64_t>(w);
+        td[w] = ~std::uint64_t(0);  // inside, every voxel is active; outside, any may be
         if (il) dn[w] = td[w] & il->getValueMask().getWord<std::uint64_t>(w);
       }
       const float* phi = leaf.buffer().data();
@@ -1095,13 +1101,14 @@ void fill_by_wavefront(FloatGrid& sdf, const openvdb::Int32Grid& index_grid, con
       FloatLeaf& leaf = *table.leaves[i];
       float* phi = leaf.buffer().data();
       for (int w = 0; w < 8; ++w) {
-        for (std::uint64_t bits = leaf.getValueMask().getWord<std::uint64_t>(w); bits;
-             bits &= bits - 1) {
+        for (std::uint64_t bits = ~std::uint64_t(0); bits; bits &= bits - 1) {
           const int pos = 64 * w + __builtin_ctzll(bits);
-          if (!(phi[pos] < exterior) || ((outside[i][w] >> (pos & 63) & 1u) &&
-                                         !(known[i][w] >> (pos & 63) & 1u))) {
+          const bool filled = outside[i][w] >> (pos & 63) & 1u;
+          if (!(phi[pos] < exterior) || (filled && !(known[i][w] >> (pos & 63) & 1u))) {
             phi[pos] = exterior;
             leaf.setValueOff(pos);
+          } else if (filled) {
+            leaf.setValueOn(pos);
           }
         }
       }
