@@ -897,10 +897,10 @@ void fill_by_wavefront(FloatGrid& sdf, const openvdb::Int32Grid& index_grid, con
     for (std::size_t i = range.begin(); i < range.end(); ++i) {
       const FloatLeaf& leaf = *table.leaves[i];
       const openvdb::Int32Tree::LeafNodeType* il = acc.probeConstLeaf(leaf.origin());
+      // Every voxel not a seed is to fill: inside, all are active; outside, any may be.
       LeafBits dn{}, td{}, out{};
       for (int w = 0; w < 8; ++w) {
-        td[w] = ~std::uint64_t(0);  // inside, every voxel is active; outside, any may be
-        if (il) dn[w] = td[w] & il->getValueMask().getWord<std::uint64_t>(w);
+        if (il) dn[w] = il->getValueMask().getWord<std::uint64_t>(w);
       }
       const float* phi = leaf.buffer().data();
       const std::int32_t* src = il ? il->buffer().data() : nullptr;
@@ -916,7 +916,7 @@ void fill_by_wavefront(FloatGrid& sdf, const openvdb::Int32Grid& index_grid, con
             dn[w] &= ~(std::uint64_t(1) << (pos & 63));
           }
         }
-        td[w] &= ~dn[w];
+        td[w] = ~dn[w];
         for (std::uint64_t bits = td[w]; bits; bits &= bits - 1) {
           const int pos = 64 * w + __builtin_ctzll(bits);
           if (!(phi[pos] < 0.0f)) out[w] |= std::uint64_t(1) << (pos & 63);
@@ -1100,16 +1100,13 @@ void fill_by_wavefront(FloatGrid& sdf, const openvdb::Int32Grid& index_grid, con
     for (std::size_t i = range.begin(); i < range.end(); ++i) {
       FloatLeaf& leaf = *table.leaves[i];
       float* phi = leaf.buffer().data();
-      for (int w = 0; w < 8; ++w) {
-        for (std::uint64_t bits = ~std::uint64_t(0); bits; bits &= bits - 1) {
-          const int pos = 64 * w + __builtin_ctzll(bits);
-          const bool filled = outside[i][w] >> (pos & 63) & 1u;
-          if (!(phi[pos] < exterior) || (filled && !(known[i][w] >> (pos & 63) & 1u))) {
-            phi[pos] = exterior;
-            leaf.setValueOff(pos);
-          } else if (filled) {
-            leaf.setValueOn(pos);
-          }
+      for (int pos = 0; pos < 512; ++pos) {
+        const bool filled = outside[i][pos >> 6] >> (pos & 63) & 1u;
+        if (!(phi[pos] < exterior) || (filled && !(known[i][pos >> 6] >> (pos & 63) & 1u))) {
+          phi[pos] = exterior;
+          leaf.setValueOff(pos);
+        } else if (filled) {
+          leaf.setValueOn(pos);
         }
       }
     }
