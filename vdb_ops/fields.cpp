@@ -787,12 +787,9 @@ void refine_by_neighbour_triangles(const LeafTable& table, const std::vector<Lea
           const int b = __builtin_ctzll(bits), y = b >> 3, z = b & 7;
           const int c = ((x + 1) * 10 + y + 1) * 10 + z + 1;
           const std::int32_t own = block[c];
-          std::int32_t previous = own;
           for (int k : off1) {
             const std::int32_t id = block[c + k];
-            if (id == previous || id < 0) continue;
-            previous = id;
-            if (id != own &&
+            if (id >= 0 && id != own &&
                 dot3(tris[std::size_t(own)].n, tris[std::size_t(id)].n) <
                     kMedialNormalCos) {
               medial[li][x] |= std::uint64_t(1) << b;
