@@ -654,15 +654,19 @@ bool any_bit(const LeafBits& m) {
 }
 
 /// The bits of `masks` over a leaf and its one-voxel halo: halo[x + 1][y + 1] bit z + 1 is
-/// voxel (x, y, z) of the leaf's frame, x, y, z in [-1, 8].
+/// voxel (x, y, z) of the leaf's frame, x, y, z in [-1, 8]. With `touched` (per leaf, its
+/// mask's touched_neighbours()), neighbours with nothing in the slab facing the leaf are skipped.
 void gather_halo_bits(const std::vector<LeafBits>& masks, const std::array<std::int32_t, 27>& nb,
-                      std::uint16_t (&halo)[10][10]) {
+                      std::uint16_t (&halo)[10][10], const std::uint32_t* touched = nullptr) {
   std::memset(halo, 0, sizeof(halo));
   for (int sx = 0; sx < 3; ++sx)
     for (int sy = 0; sy < 3; ++sy)
       for (int sz = 0; sz < 3; ++sz) {
-        const std::int32_t ni = nb[(sx * 3 + sy) * 3 + sz];
+        const int s = (sx * 3 + sy) * 3 + sz;
+        const std::int32_t ni = nb[s];
         if (ni < 0) continue;
+        // This leaf is at offset 26 - s from the neighbour.
+        if (touched && !(touched[ni] >> (26 - s) & 1u)) continue;
         const LeafBits& m = masks[std::size_t(ni)];
         const int x0 = sx == 0 ? 7 : 0, x1 = sx == 1 ? 8 : x0 + 1;
         const int y0 = sy == 0 ? 7 : 0, y1 = sy == 1 ? 8 : y0 + 1;
@@ -713,6 +717,22 @@ std::uint32_t touched_neighbours(const LeafBits& m) {
   }
   return out;
 }
+
+/// A map of triangles to small numbers (one per thread) that clears in O(1): triangle i maps to
+/// slot[i] when stamp[i] == now.
+struct TriangleSlots {
+  explicit TriangleSlots(std::size_t n_triangles) : stamp(n_triangles, 0u), slot(n_triangles, 0u) {}
+  std::vector<std::uint32_t> stamp;
+  std::vector<std::uint32_t> slot;
+  std::uint32_t now = 0;
+  void clear() {
+    if (++now == 0) {
+      std::fill(stamp.begin(), stamp.end(), 0u);
+      now = 1;
+    }
+  }
+  bool has(std::int32_t id) const { return stamp[std::size_t(id)] == now; }
+};
 
 /// `masks` dilated by one voxel (26-neighbourhood), for every leaf.
 std::vector<LeafBits> dilate_bits(const LeafTable& table, const std::vector<LeafBits>& masks) {
@@ -799,25 +819,7 @@ void refine_by_neighbour_triangles(const LeafTable& table, const std::vector<Lea
         }
     }
   });
-  // Per thread: a map of triangles to small numbers that clears in O(1): triangle i maps to
-  // slot[i] when stamp[i] == now.
-  struct TriangleSlots {
-    std::vector<std::uint32_t> stamp;
-    std::vector<std::uint32_t> slot;
-    std::uint32_t now = 0;
-    void clear() {
-      if (++now == 0) {
-        std::fill(stamp.begin(), stamp.end(), 0u);
-        now = 1;
-      }
-    }
-  };
-  tbb::enumerable_thread_specific<TriangleSlots> slots([&] {
-    TriangleSlots map;
-    map.stamp.assign(tris.size(), 0u);
-    map.slot.assign(tris.size(), 0u);
-    return map;
-  });
+  tbb::enumerable_thread_specific<TriangleSlots> slots(TriangleSlots(tris.size()));
   // Lowers phi at voxel (x, y, z) of a leaf to its distance to triangles cand[0, nc).
   auto lower = [&](FloatLeaf& leaf, int x, int y, int z, const std::int32_t* cand, int nc) {
     if (nc == 0) return;
@@ -967,6 +969,9 @@ void fill_by_wavefront(FloatGrid& sdf, const openvdb::Int32Grid& index_grid, con
   std::vector<LeafBits> known(n), todo(n), tentative(n), medial(n), outside(n);
   std::array<std::vector<LeafBits>, 2> fresh = {std::vector<LeafBits>(n),
                                                 std::vector<LeafBits>(n)};
+  // Per leaf, touched_neighbours() of its `fresh` mask.
+  std::array<std::vector<std::uint32_t>, 2> fresh_touched = {std::vector<std::uint32_t>(n),
+                                                             std::vector<std::uint32_t>(n)};
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 64),
                     [&](const tbb::blocked_range<std::size_t>& range) {
     openvdb::Int32Grid::ConstAccessor acc = index_grid.getConstAccessor();
@@ -1001,6 +1006,7 @@ void fill_by_wavefront(FloatGrid& sdf, const openvdb::Int32Grid& index_grid, con
       todo[i] = td;
       outside[i] = out;
       fresh[0][i] = dn;
+      fresh_touched[0][i] = touched_neighbours(dn);
       known[i] = dn;
     }
   });
@@ -1017,13 +1023,19 @@ void fill_by_wavefront(FloatGrid& sdf, const openvdb::Int32Grid& index_grid, con
   std::unique_ptr<std::atomic<std::uint8_t>[]> next_mark(new std::atomic<std::uint8_t>[n]);
   for (std::size_t i = 0; i < n; ++i) next_mark[i].store(0, std::memory_order_relaxed);
   float limit = kSeedBandVoxels + 1.0f;  // voxels; accepted distances grow by one per iteration
+  tbb::enumerable_thread_specific<TriangleSlots> slots(TriangleSlots(tris.size()));
   for (int iteration = 0; !active.empty(); ++iteration, limit += 1.0f) {
     const std::vector<LeafBits>& fresh_in = fresh[iteration & 1];
     std::vector<LeafBits>& fresh_out = fresh[(iteration + 1) & 1];
+    const std::vector<std::uint32_t>& touched_in = fresh_touched[iteration & 1];
+    std::vector<std::uint32_t>& touched_out = fresh_touched[(iteration + 1) & 1];
     const float limit2 = limit * limit;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, active.size(), 4),
                       [&](const tbb::blocked_range<std::size_t>& range) {
       std::int32_t block[1000];
+      std::uint64_t words[1000];
+      std::int32_t distinct[64];
+      TriangleSlots& map = slots.local();
       for (std::size_t j = range.begin(); j < range.end(); ++j) {
         const std::size_t li = std::size_t(active[j]);
         // The leaves of an iteration are far apart in memory and their triangles and distances
@@ -1039,7 +1051,7 @@ void fill_by_wavefront(FloatGrid& sdf, const openvdb::Int32Grid& index_grid, con
         }
         const std::array<std::int32_t, 27>& nb = table.neighbours[li];
         std::uint16_t halo[10][10];
-        gather_halo_bits(fresh_in, nb, halo);
+        gather_halo_bits(fresh_in, nb, halo, touched_in.data());
         FloatLeaf& leaf = *table.leaves[li];
         float* phi = leaf.buffer().data();
         std::int32_t* own = &ids[li * 512];
@@ -1051,7 +1063,11 @@ void fill_by_wavefront(FloatGrid& sdf, const openvdb::Int32Grid& index_grid, con
         // Without fresh voxels around, the leaf only accepts its pending tentative voxels.
         if (any_fresh) {
           // Triangles of the voxels accepted last iteration, over the leaf and its halo; only
-          // read where `halo` has a bit.
+          // read where `halo` has a bit. With at most 64 distinct ones, each also becomes a bit
+          // (`words`): a voxel's candidates are then the union of its fresh neighbours' bits,
+          // distinct by construction (fandisk 512^3: 5-8 distinct in most leaves).
+          map.clear();
+          int n_distinct = 0;
           for (int hx = 0; hx < 10; ++hx)
             for (int hy = 0; hy < 10; ++hy)
               for (unsigned row = halo[hx][hy]; row; row &= row - 1) {
@@ -1059,10 +1075,23 @@ void fill_by_wavefront(FloatGrid& sdf, const openvdb::Int32Grid& index_grid, con
                 const int x = hx - 1, y = hy - 1, z = hz - 1;
                 const std::int32_t ni =
                     nb[(((x + 8) >> 3) * 3 + ((y + 8) >> 3)) * 3 + ((z + 8) >> 3)];
-                block[(hx * 10 + hy) * 10 + hz] =
-                    ids[std::size_t(ni) * 512 +
-                        std::size_t(((x & 7) << 6) | ((y & 7) << 3) | (z & 7))];
+                const std::int32_t id = ids[std::size_t(ni) * 512 +
+                                            std::size_t(((x & 7) << 6) | ((y & 7) << 3) | (z & 7))];
+                const int c = (hx * 10 + hy) * 10 + hz;
+                block[c] = id;
+                if (n_distinct > 64) continue;
+                if (!map.has(id)) {
+                  if (n_distinct == 64) {
+                    n_distinct = 65;  // too many: voxel by voxel
+                    continue;
+                  }
+                  map.stamp[std::size_t(id)] = map.now;
+                  map.slot[std::size_t(id)] = std::uint32_t(n_distinct);
+                  distinct[n_distinct++] = id;
+                }
+                words[c] = std::uint64_t(1) << map.slot[std::size_t(id)];
               }
+          const bool by_words = n_distinct <= 64;
           for (int x = 0; x < 8; ++x)
             for (int y = 0; y < 8; ++y) {
               const unsigned todo_row = unsigned(todo[li][x] >> (8 * y)) & 0xffu;
@@ -1091,12 +1120,25 @@ void fill_by_wavefront(FloatGrid& sdf, const openvdb::Int32Grid& index_grid, con
                 std::int32_t cand[26];
                 int nc = 0;
                 const int c = ((x + 1) * 10 + y + 1) * 10 + z + 1;
-                for (; around; around &= around - 1) {
-                  const std::int32_t id = block[c + off27[__builtin_ctz(around)]];
-                  if (id == best_id) continue;
-                  bool seen = false;
-                  for (int q = 0; q < nc; ++q) seen |= cand[q] == id;
-                  if (!seen) cand[nc++] = id;
+                // The triangle of the first fresh neighbour (offset order).
+                const std::int32_t first = block[c + off27[__builtin_ctz(around)]];
+                if (by_words) {
+                  std::uint64_t word = 0;
+                  for (; around; around &= around - 1) {
+                    word |= words[c + off27[__builtin_ctz(around)]];
+                  }
+                  if (has && map.has(best_id)) {
+                    word &= ~(std::uint64_t(1) << map.slot[std::size_t(best_id)]);
+                  }
+                  for (; word; word &= word - 1) cand[nc++] = distinct[__builtin_ctzll(word)];
+                } else {
+                  for (; around; around &= around - 1) {
+                    const std::int32_t id = block[c + off27[__builtin_ctz(around)]];
+                    if (id == best_id) continue;
+                    bool seen = false;
+                    for (int q = 0; q < nc; ++q) seen |= cand[q] == id;
+                    if (!seen) cand[nc++] = id;
+                  }
                 }
                 if (nc == 0) continue;
                 const float p[3] = {float(origin[0] + x), float(origin[1] + y),
@@ -1104,7 +1146,7 @@ void fill_by_wavefront(FloatGrid& sdf, const openvdb::Int32Grid& index_grid, con
                 const bool out = (outside[li][x] & bit) != 0;
                 // Candidates facing apart: wavefronts from different sides meet here (inside:
                 // the medial surface, where the flux lives).
-                const float* n0 = tris[std::size_t(has ? best_id : cand[0])].n;
+                const float* n0 = tris[std::size_t(has ? best_id : first)].n;
                 for (int q = 0; q < nc && !out; ++q) {
                   if (dot3(n0, tris[std::size_t(cand[q])].n) < kMedialNormalCos) {
                     medial[li][x] |= bit;
@@ -1143,9 +1185,10 @@ void fill_by_wavefront(FloatGrid& sdf, const openvdb::Int32Grid& index_grid, con
           known[li][x] |= accepted[x];
         }
         fresh_out[li] = accepted;
+        touched_out[li] = touched_neighbours(accepted);
         if (pending) next_mark[li].store(1, std::memory_order_relaxed);
         // Wake the neighbours whose halo holds a voxel accepted here (the leaf itself included).
-        for (std::uint32_t t = touched_neighbours(accepted); t; t &= t - 1) {
+        for (std::uint32_t t = touched_out[li]; t; t &= t - 1) {
           const std::int32_t ni = nb[std::size_t(__builtin_ctz(t))];
           if (ni >= 0) next_mark[std::size_t(ni)].store(1, std::memory_order_relaxed);
         }
@@ -1155,8 +1198,12 @@ void fill_by_wavefront(FloatGrid& sdf, const openvdb::Int32Grid& index_grid, con
     // is all zero but for this iteration's leaves; then list the next leaves in index order.
     if (iteration == 0) {
       std::fill(fresh[0].begin(), fresh[0].end(), LeafBits{});
+      std::fill(fresh_touched[0].begin(), fresh_touched[0].end(), 0u);
     } else {
-      for (std::int32_t li : previous) fresh[iteration & 1][std::size_t(li)] = LeafBits{};
+      for (std::int32_t li : previous) {
+        fresh[iteration & 1][std::size_t(li)] = LeafBits{};
+        fresh_touched[iteration & 1][std::size_t(li)] = 0u;
+      }
     }
     previous.swap(active);
     active.clear();
