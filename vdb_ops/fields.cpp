@@ -476,6 +476,9 @@ struct TriangleF {
   /// bw . ap); the distance there is |n . ap| (n: unit normal). NaN for degenerate triangles
   /// (every comparison false: the face test fails, and no normal "faces away").
   float bv[3], bw[3], n[3];
+  /// Heights of b, c and a over the opposite edges (ac, ab, bc): a point whose barycentric
+  /// coordinate of b is bv < 0 lies at least -bv * height[0] from the triangle within its plane.
+  float height[3];
 };
 
 inline float dot3(const float* u, const float* v) {
@@ -505,6 +508,10 @@ std::vector<TriangleF> float_triangles(const IndexMesh& m) {
       t.bw[k] = (d00 * t.ac[k] - d01 * t.ab[k]) * inv;
       t.n[k] = cr[k] / len;
     }
+    const float bc[3] = {t.ac[0] - t.ab[0], t.ac[1] - t.ab[1], t.ac[2] - t.ab[2]};
+    t.height[0] = len / std::sqrt(d11);
+    t.height[1] = len / std::sqrt(d00);
+    t.height[2] = len / std::sqrt(dot3(bc, bc));
   }
   return out;
 }
@@ -551,6 +558,50 @@ inline float point_triangle_distance2f(const float (&p)[3], const TriangleF& t) 
   const float q[3] = {ap[0] - t.ab[0] * v - t.ac[0] * w, ap[1] - t.ab[1] * v - t.ac[1] * w,
                       ap[2] - t.ab[2] * v - t.ac[2] * w};
   return dot3(q, q);
+}
+
+/// Lowers (best, best_id) to the closest of the triangles cand[0, nc) to p (squared distance,
+/// ties to the smaller index), exactly as measuring each with point_triangle_distance2f() would,
+/// but cheaper: the triangles p projects into are measured first (their distance is the
+/// plane's), and the others only where a lower bound of their distance (to the plane, and within
+/// it to the triangle's nearest edge line) does not already exceed the best by more than
+/// rounding. Fandisk 512^3: half of the wavefront's measurements project outside the triangle,
+/// and two thirds of those are skipped.
+inline void lower_to_closest(const float (&p)[3], const std::int32_t* cand, int nc,
+                             const std::vector<TriangleF>& tris, float& best,
+                             std::int32_t& best_id) {
+  float bound[124];  // up to the 5^3 neighbourhood's triangles (refinement)
+  int later[124];
+  int n_later = 0;
+  for (int q = 0; q < nc; ++q) {
+    const TriangleF& t = tris[std::size_t(cand[q])];
+    const float ap[3] = {p[0] - t.a[0], p[1] - t.a[1], p[2] - t.a[2]};
+    const float bv = dot3(t.bv, ap), bw = dot3(t.bw, ap);
+    const float d = dot3(t.n, ap);
+    if (bv >= 0.0f && bw >= 0.0f && bv + bw <= 1.0f) {
+      const float d2 = d * d;
+      if (d2 < best || (d2 == best && cand[q] < best_id)) {
+        best = d2;
+        best_id = cand[q];
+      }
+    } else {
+      const float m = std::max(std::max(-bv * t.height[0], -bw * t.height[1]),
+                               (bv + bw - 1.0f) * t.height[2]);
+      bound[n_later] = d * d + m * m;
+      later[n_later++] = q;
+    }
+  }
+  for (int r = 0; r < n_later; ++r) {
+    // Rounding of either value stays far below this margin (relative 1e-5, absolute 1e-3
+    // voxels^2); NaN bounds (degenerate triangles) fail the test and are measured.
+    if (bound[r] > best * 1.00001f + 1e-3f) continue;
+    const std::int32_t id = cand[later[r]];
+    const float d2 = point_triangle_distance2f(p, tris[std::size_t(id)]);
+    if (d2 < best || (d2 == best && id < best_id)) {
+      best = d2;
+      best_id = id;
+    }
+  }
 }
 
 /// Width of the band meshToVolume computes for the wavefront's seeds, voxels: at most 2, where
@@ -828,9 +879,8 @@ void refine_by_neighbour_triangles(const LeafTable& table, const std::vector<Lea
     const Coord origin = leaf.origin();
     const float p[3] = {float(origin[0] + x), float(origin[1] + y), float(origin[2] + z)};
     float best = (phi[pos] / h) * (phi[pos] / h);
-    for (int q = 0; q < nc; ++q) {
-      best = std::min(best, point_triangle_distance2f(p, tris[std::size_t(cand[q])]));
-    }
+    std::int32_t best_id = -1;
+    lower_to_closest(p, cand, nc, tris, best, best_id);
     const float d = std::sqrt(best) * h;
     if (d < std::abs(phi[pos])) phi[pos] = phi[pos] < 0.0f ? -d : d;
   };
@@ -1152,13 +1202,7 @@ void fill_by_wavefront(FloatGrid& sdf, const openvdb::Int32Grid& index_grid, con
                     medial[li][x] |= bit;
                   }
                 }
-                for (int q = 0; q < nc; ++q) {
-                  const float d2 = point_triangle_distance2f(p, tris[std::size_t(cand[q])]);
-                  if (d2 < best || (d2 == best && cand[q] < best_id)) {
-                    best = d2;
-                    best_id = cand[q];
-                  }
-                }
+                lower_to_closest(p, cand, nc, tris, best, best_id);
                 own[pos] = best_id;
                 phi[pos] = out ? std::sqrt(best) * h : -std::sqrt(best) * h;
                 tn[x] |= bit;
