@@ -640,6 +640,10 @@ void activate_interior(FloatTree& tree) {
 /// The leaves of a tree in its own order, with each leaf's 26 neighbours (index or -1).
 struct LeafTable {
   std::vector<FloatLeaf*> leaves;
+  /// Each leaf's values and origin, read without touching the leaf node (a cache miss each in
+  /// the wavefront's scattered order; LeafBuffer::data() also checks for out-of-core data).
+  std::vector<float*> values;
+  std::vector<Coord> origins;
   /// neighbours[i][(sx * 3 + sy) * 3 + sz]: the leaf at origin + 8 * (sx - 1, sy - 1, sz - 1).
   std::vector<std::array<std::int32_t, 27>> neighbours;
 };
@@ -657,11 +661,15 @@ LeafTable make_leaf_table(FloatTree& tree) {
     }
   }
   t.neighbours.resize(t.leaves.size());
+  t.values.resize(t.leaves.size());
+  t.origins.resize(t.leaves.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, t.leaves.size(), 256),
                     [&](const tbb::blocked_range<std::size_t>& range) {
     openvdb::tree::ValueAccessor<const openvdb::Int32Tree> acc(index_of);
     for (std::size_t i = range.begin(); i < range.end(); ++i) {
-      const Coord c = t.leaves[i]->origin() >> 3;
+      t.values[i] = t.leaves[i]->buffer().data();
+      t.origins[i] = t.leaves[i]->origin();
+      const Coord c = t.origins[i] >> 3;
       for (int s = 0; s < 27; ++s) {
         t.neighbours[i][s] = acc.getValue(c.offsetBy(s / 9 - 1, s / 3 % 3 - 1, s % 3 - 1));
       }
@@ -1093,7 +1101,7 @@ void fill_by_wavefront(FloatGrid& sdf, const openvdb::Int32Grid& index_grid, con
         if (j + 3 < range.end()) {
           const std::size_t lp = std::size_t(active[j + 3]);
           const char* a = reinterpret_cast<const char*>(&ids[lp * 512]);
-          const char* b = reinterpret_cast<const char*>(table.leaves[lp]->buffer().data());
+          const char* b = reinterpret_cast<const char*>(table.values[lp]);
           for (int k = 0; k < 2048; k += 64) {
             __builtin_prefetch(a + k);
             __builtin_prefetch(b + k);
@@ -1102,11 +1110,10 @@ void fill_by_wavefront(FloatGrid& sdf, const openvdb::Int32Grid& index_grid, con
         const std::array<std::int32_t, 27>& nb = table.neighbours[li];
         std::uint16_t halo[10][10];
         gather_halo_bits(fresh_in, nb, halo, touched_in.data());
-        FloatLeaf& leaf = *table.leaves[li];
-        float* phi = leaf.buffer().data();
+        float* phi = table.values[li];
         std::int32_t* own = &ids[li * 512];
         LeafBits& tn = tentative[li];
-        const Coord origin = leaf.origin();
+        const Coord& origin = table.origins[li];
         bool any_fresh = false;
         for (int x = 0; x < 10; ++x)
           for (int y = 0; y < 10; ++y) any_fresh |= halo[x][y] != 0;
@@ -1196,8 +1203,10 @@ void fill_by_wavefront(FloatGrid& sdf, const openvdb::Int32Grid& index_grid, con
                 const bool out = (outside[li][x] & bit) != 0;
                 // Candidates facing apart: wavefronts from different sides meet here (inside:
                 // the medial surface, where the flux lives).
+                // (Without a tentative triangle, `first` is a candidate itself: one is not
+                // enough.)
                 const float* n0 = tris[std::size_t(has ? best_id : first)].n;
-                for (int q = 0; q < nc && !out; ++q) {
+                for (int q = 0; q < nc && !out && (has || nc > 1); ++q) {
                   if (dot3(n0, tris[std::size_t(cand[q])].n) < kMedialNormalCos) {
                     medial[li][x] |= bit;
                   }
