@@ -1106,6 +1106,23 @@ void fill_by_wavefront(FloatGrid& sdf, const openvdb::Int32Grid& index_grid, con
             __builtin_prefetch(a + k);
             __builtin_prefetch(b + k);
           }
+          // And the triangles of the face neighbours' fresh voxels facing it.
+          constexpr int kFace[6] = {4, 22, 10, 16, 12, 14};  // -x, +x, -y, +y, -z, +z
+          const std::array<std::int32_t, 27>& nbp = table.neighbours[lp];
+          for (int f = 0; f < 6; ++f) {
+            const int s = kFace[f];
+            const std::int32_t ni = nbp[s];
+            if (ni < 0 || !(touched_in[std::size_t(ni)] >> (26 - s) & 1u)) continue;
+            const std::int32_t* base = &ids[std::size_t(ni) * 512];
+            if (f < 2) {  // the neighbour's plane x = 7 or 0: 64 consecutive
+              const std::int32_t* plane = base + (f == 0 ? 7 * 64 : 0);
+              for (int k = 0; k < 64; k += 16) __builtin_prefetch(plane + k);
+            } else if (f < 4) {  // rows y = 7 or 0: 8 of 8
+              for (int x = 0; x < 8; ++x) __builtin_prefetch(base + x * 64 + (f == 2 ? 56 : 0));
+            } else {  // columns z = 7 or 0: every 8th
+              for (int k = 0; k < 512; k += 16) __builtin_prefetch(base + k);
+            }
+          }
         }
         const std::array<std::int32_t, 27>& nb = table.neighbours[li];
         std::uint16_t halo[10][10];
