@@ -1291,8 +1291,11 @@ void fill_by_wavefront(FloatGrid& sdf, const openvdb::Int32Grid& index_grid, con
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 64),
                     [&](const tbb::blocked_range<std::size_t>& range) {
     for (std::size_t i = range.begin(); i < range.end(); ++i) {
+      // Without outside voxels to fill, a leaf holds seeds (|phi| below the seed band) and
+      // inside voxels (negative): nothing to do.
+      if (!any_bit(outside[i])) continue;
       FloatLeaf& leaf = *table.leaves[i];
-      float* phi = leaf.buffer().data();
+      float* phi = table.values[i];
       for (int pos = 0; pos < 512; ++pos) {
         const bool filled = outside[i][pos >> 6] >> (pos & 63) & 1u;
         if (!(phi[pos] < exterior) || (filled && !(known[i][pos >> 6] >> (pos & 63) & 1u))) {
