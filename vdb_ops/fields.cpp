@@ -791,6 +791,18 @@ struct TriangleSlots {
     }
   }
   bool has(std::int32_t id) const { return stamp[std::size_t(id)] == now; }
+  /// The bit of triangle `id`, appended to distinct[0, n_distinct) with the next slot if new;
+  /// 0 when it is new and all 64 slots are taken.
+  std::uint64_t bit(std::int32_t id, std::int32_t (&distinct)[64], int& n_distinct) {
+    const std::size_t t = std::size_t(id);
+    if (stamp[t] != now) {
+      if (n_distinct == 64) return 0;
+      stamp[t] = now;
+      slot[t] = std::uint32_t(n_distinct);
+      distinct[n_distinct++] = id;
+    }
+    return std::uint64_t(1) << slot[t];
+  }
 };
 
 /// `masks` dilated by one voxel (26-neighbourhood), for every leaf.
@@ -919,15 +931,9 @@ void refine_by_neighbour_triangles(const LeafTable& table, const std::vector<Lea
           for (int z = 0; z < w; ++z) {
             const std::int32_t id = src[z];
             if (id != previous && id >= 0) {
-              const std::size_t t = std::size_t(id);
-              if (map.stamp[t] != map.now) {
-                if (n_distinct == 64) return false;
-                map.stamp[t] = map.now;
-                map.slot[t] = std::uint32_t(n_distinct);
-                distinct[n_distinct++] = id;
-              }
               previous = id;
-              previous_bit = std::uint64_t(1) << map.slot[t];
+              previous_bit = map.bit(id, distinct, n_distinct);
+              if (!previous_bit) return false;
             }
             dst[z] = id >= 0 ? previous_bit : 0;
           }
@@ -1142,6 +1148,7 @@ void fill_by_wavefront(FloatGrid& sdf, const openvdb::Int32Grid& index_grid, con
           // distinct by construction (fandisk 512^3: 5-8 distinct in most leaves).
           map.clear();
           int n_distinct = 0;
+          bool by_words = true;
           for (int hx = 0; hx < 10; ++hx)
             for (int hy = 0; hy < 10; ++hy)
               for (unsigned row = halo[hx][hy]; row; row &= row - 1) {
@@ -1153,19 +1160,10 @@ void fill_by_wavefront(FloatGrid& sdf, const openvdb::Int32Grid& index_grid, con
                                             std::size_t(((x & 7) << 6) | ((y & 7) << 3) | (z & 7))];
                 const int c = (hx * 10 + hy) * 10 + hz;
                 block[c] = id;
-                if (n_distinct > 64) continue;
-                if (!map.has(id)) {
-                  if (n_distinct == 64) {
-                    n_distinct = 65;  // too many: voxel by voxel
-                    continue;
-                  }
-                  map.stamp[std::size_t(id)] = map.now;
-                  map.slot[std::size_t(id)] = std::uint32_t(n_distinct);
-                  distinct[n_distinct++] = id;
-                }
-                words[c] = std::uint64_t(1) << map.slot[std::size_t(id)];
+                if (!by_words) continue;
+                words[c] = map.bit(id, distinct, n_distinct);
+                by_words = words[c] != 0;  // else too many: voxel by voxel
               }
-          const bool by_words = n_distinct <= 64;
           for (int x = 0; x < 8; ++x)
             for (int y = 0; y < 8; ++y) {
               const unsigned todo_row = unsigned(todo[li][x] >> (8 * y)) & 0xffu;
