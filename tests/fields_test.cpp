@@ -15,6 +15,7 @@
 
 #include "assets/shapes.h"
 #include "core/errors.h"
+#include "core/validate.h"
 #include "tests/test_support.h"
 #include "vdb_ops/fields.h"
 
@@ -319,6 +320,58 @@ TEST(FieldsBox, SameGridsForAnyThreadCount) {
     EXPECT_EQ(one[g].active_voxels, all[g].active_voxels);
     EXPECT_EQ(one[g].checksum, all[g].checksum) << one[g].name;
   }
+}
+
+// --- the seed band's voxelization ----------------------------------------------------------------
+
+/// `mesh` and, beside it, a thin triangular prism along z as tall as the unit cube (8 triangles):
+/// at 96^3 its side triangles' boxes are taller than 64 voxels, so they take the flood fill.
+SurfaceMesh with_tall_prism(SurfaceMesh mesh) {
+  const std::uint32_t b = std::uint32_t(mesh.points.size());
+  for (const double z : {-0.5, 0.5}) {
+    mesh.points.push_back({0.6, -0.05, z});
+    mesh.points.push_back({0.7, -0.05, z});
+    mesh.points.push_back({0.65, 0.05, z});
+  }
+  mesh.triangles.push_back({b + 0, b + 2, b + 1});  // bottom, facing -z
+  mesh.triangles.push_back({b + 3, b + 4, b + 5});  // top, facing +z
+  for (std::uint32_t i = 0; i < 3; ++i) {
+    const std::uint32_t j = (i + 1) % 3;
+    mesh.triangles.push_back({b + i, b + j, b + 3 + j});
+    mesh.triangles.push_back({b + i, b + 3 + j, b + 3 + i});
+  }
+  return mesh;
+}
+
+TEST(FieldsSeedBand, SameAsMeshToVolumeVoxelForVoxel) {
+  FieldOptions options;
+  options.resolution = 96;
+  const SeedBandComparison c = compare_seed_band(with_tall_prism(make_shape("sphere", 2)), options);
+  EXPECT_TRUE(c.voxelized_here);
+  EXPECT_GE(c.flood_filled, 6u);  // the prism's sides
+  EXPECT_GT(c.band_voxels, 20000u);
+  EXPECT_EQ(c.differing_voxels, 0u);
+}
+
+TEST(FieldsSeedBand, SharedMeshesSameAsMeshToVolume) {
+  const auto dir = test::shared_meshes_dir();
+  if (dir.empty()) GTEST_SKIP() << "../shared/meshes not found";
+  for (const char* name : {"fandisk.obj", "fertility.off", "decimated-knight.off"}) {
+    const LoadedSurface s = load_surface((dir / name).string());
+    FieldOptions options;
+    options.resolution = 160;
+    const SeedBandComparison c = compare_seed_band(s.mesh, options);
+    EXPECT_TRUE(c.voxelized_here) << name;
+    EXPECT_GT(c.band_voxels, 0u) << name;
+    EXPECT_EQ(c.differing_voxels, 0u) << name;
+  }
+}
+
+TEST(FieldsSeedBand, SmallMeshesStayWithMeshToVolume) {
+  // Under 1000 triangles OpenVDB measures against parts of large triangles: not replicated.
+  const SeedBandComparison c = compare_seed_band(box_mesh(), FieldOptions{});
+  EXPECT_FALSE(c.voxelized_here);
+  EXPECT_EQ(c.differing_voxels, 0u);
 }
 
 // --- .vdb out and in -----------------------------------------------------------------------------

@@ -36,6 +36,7 @@
 #include <limits>
 #include <mutex>
 #include <new>
+#include <set>
 #include <sstream>
 #include <unordered_map>
 
@@ -388,6 +389,7 @@ struct BandVoxels {
   std::vector<std::uint64_t> bits;     ///< bit rows (fast path) or visited marks (flood fill)
   std::vector<float> measured;         ///< squared distances measured near the plane
   std::vector<Coord> stack;
+  std::size_t flood_filled = 0;  ///< triangles voxelized by the flood fill
 
   BandLeaf& leaf_at(const Coord& ijk) {
     const std::uint64_t key = band_leaf_key(ijk);
@@ -522,6 +524,7 @@ void band_voxelize_triangle(const IndexMesh& m, std::size_t index, BandVoxels& o
     return;
   }
   // Thin triangles (the plane bound is unreliable) and tall boxes: the flood fill itself.
+  ++out.flood_filled;
   out.bits.assign((volume + 63) / 64, 0);
   auto first_visit = [&](const Coord& ijk) {
     const Coord d = ijk - lo;
@@ -572,7 +575,8 @@ bool band_voxels_apply(const IndexMesh& m) {
 }
 
 /// meshToVolume's distance and index trees after voxelization (see above), leaf for leaf.
-void band_voxels(const IndexMesh& m, FloatTree& dist, openvdb::Int32Tree& index) {
+/// Returns the number of triangles voxelized by the flood fill.
+std::size_t band_voxels(const IndexMesh& m, FloatTree& dist, openvdb::Int32Tree& index) {
   tbb::enumerable_thread_specific<BandVoxels> threads;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m.triangles.size(), 64),
                     [&](const tbb::blocked_range<std::size_t>& range) {
@@ -582,8 +586,10 @@ void band_voxels(const IndexMesh& m, FloatTree& dist, openvdb::Int32Tree& index)
   // Leaves of the same key from different threads: the smaller distance, then the smaller index
   // (the same whatever the order, as in meshToVolume's own merge).
   std::vector<std::pair<std::uint64_t, BandLeaf*>> all;
+  std::size_t flood_filled = 0;
   for (BandVoxels& t : threads) {
     for (auto& [key, leaf] : t.leaves) all.emplace_back(key, &leaf);
+    flood_filled += t.flood_filled;
   }
   std::sort(all.begin(), all.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
   std::vector<std::size_t> first;
@@ -608,17 +614,21 @@ void band_voxels(const IndexMesh& m, FloatTree& dist, openvdb::Int32Tree& index)
     dist.addLeaf(leaf.dist.release());
     index.addLeaf(leaf.index.release());
   }
+  return flood_filled;
 }
 
 /// The seed band: meshToVolume(m, xform, ex, in, DISABLE_RENORMALIZATION, index_grid) with
 /// band_voxels() for its voxelization where that applies, the same result either way. Widths in
-/// voxels, at most 2 (meshToVolume widens wider bands after the steps below).
+/// voxels, at most 2 (meshToVolume widens wider bands after the steps below). `flood_filled`,
+/// if given, receives the number of triangles voxelized by the flood fill (SIZE_MAX when
+/// meshToVolume did everything).
 FloatGrid::Ptr mesh_to_band(const IndexMesh& m, const openvdb::math::Transform& xform, float ex,
-                            float in, openvdb::Int32Grid& index_grid) {
+                            float in, openvdb::Int32Grid& index_grid,
+                            std::size_t* flood_filled = nullptr) {
   namespace internal = openvdb::tools::mesh_to_volume_internal;
-  const int flags = openvdb::tools::DISABLE_RENORMALIZATION;
   if (!(ex <= 2.0f && in <= 2.0f) || !band_voxels_apply(m)) {
-    return mesh_to_volume(m, xform, ex, in, &index_grid, flags);
+    if (flood_filled) *flood_filled = std::numeric_limits<std::size_t>::max();
+    return mesh_to_volume(m, xform, ex, in, &index_grid, openvdb::tools::DISABLE_RENORMALIZATION);
   }
   // From here on, meshToVolume's own steps for a signed band no wider than two voxels.
   using Adapter = openvdb::tools::QuadAndTriangleDataAdapter<openvdb::Vec3s, openvdb::Vec3I>;
@@ -633,7 +643,8 @@ FloatGrid::Ptr mesh_to_band(const IndexMesh& m, const openvdb::math::Transform& 
   const float h = float(xform.voxelSize()[0]);
   const float exterior = ex * h, interior = in * h;
 
-  band_voxels(m, dist, index);
+  const std::size_t flooded = band_voxels(m, dist, index);
+  if (flood_filled) *flood_filled = flooded;
   openvdb::tools::traceExteriorBoundaries(dist);
   std::vector<FloatLeaf*> nodes;
   nodes.reserve(dist.leafCount());
@@ -1916,6 +1927,54 @@ std::unique_ptr<Fields> build_fields(const SurfaceMesh& mesh, const FieldOptions
                         std::to_string(plan.resolution) + " (estimated " +
                         format_gb(double(plan.estimated_bytes)) + "); lower --resolution");
   }
+}
+
+SeedBandComparison compare_seed_band(const SurfaceMesh& mesh, const FieldOptions& options) {
+  init_openvdb();
+  const FieldPlan plan = plan_fields(mesh, options);
+  const openvdb::math::Transform::Ptr xform =
+      transform_of(frame_of(bounding_box(mesh), plan.voxel_size));
+  const IndexMesh im = to_index_space(mesh, *xform);
+  SeedBandComparison out;
+  openvdb::Int32Grid ours_index(-1), their_index(-1);
+  auto t0 = std::chrono::steady_clock::now();
+  std::size_t flood_filled = 0;
+  const FloatGrid::Ptr ours =
+      mesh_to_band(im, *xform, kSeedBandVoxels, kSeedBandVoxels, ours_index, &flood_filled);
+  out.seconds = seconds_since(t0);
+  t0 = std::chrono::steady_clock::now();
+  const FloatGrid::Ptr theirs = mesh_to_volume(im, *xform, kSeedBandVoxels, kSeedBandVoxels,
+                                               &their_index,
+                                               openvdb::tools::DISABLE_RENORMALIZATION);
+  out.seconds_mesh_to_volume = seconds_since(t0);
+  out.voxelized_here = flood_filled != std::numeric_limits<std::size_t>::max();
+  out.flood_filled = out.voxelized_here ? flood_filled : 0;
+  out.band_voxels = std::size_t(ours->activeVoxelCount());
+  // Every voxel of either grid's leaves (and the tiles' values at their origins).
+  auto differ = [&](const Coord& c) {
+    return ours->tree().getValue(c) != theirs->tree().getValue(c) ||
+           ours->tree().isValueOn(c) != theirs->tree().isValueOn(c) ||
+           ours_index.tree().getValue(c) != their_index.tree().getValue(c) ||
+           ours_index.tree().isValueOn(c) != their_index.tree().isValueOn(c);
+  };
+  std::set<std::array<int, 3>> leaves;
+  for (const FloatGrid* g : {ours.get(), theirs.get()}) {
+    for (auto it = g->tree().cbeginLeaf(); it; ++it) {
+      leaves.insert({it->origin()[0], it->origin()[1], it->origin()[2]});
+    }
+  }
+  for (const openvdb::Int32Grid* g : {&ours_index, &their_index}) {
+    for (auto it = g->tree().cbeginLeaf(); it; ++it) {
+      leaves.insert({it->origin()[0], it->origin()[1], it->origin()[2]});
+    }
+  }
+  for (const auto& o : leaves) {
+    for (int i = 0; i < 512; ++i) {
+      out.differing_voxels += differ(Coord(o[0] + (i >> 6), o[1] + (i >> 3 & 7), o[2] + (i & 7)));
+    }
+  }
+  if (ours->tree().background() != theirs->tree().background()) ++out.differing_voxels;
+  return out;
 }
 
 FieldStats build_narrow_band_reference(const SurfaceMesh& mesh, const FieldOptions& options) {

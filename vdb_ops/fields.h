@@ -58,7 +58,8 @@ inline constexpr double kExteriorBandVoxels = 3.0;
 /// How the filled signed distance field is computed from a mesh.
 enum class SdfMethod {
   /// The default. OpenVDB meshToVolume's voxelization (the voxels within 2 of the surface) with
-  /// its closest-polygon grid, then a closest-triangle wavefront into the interior and out to the
+  /// its closest-polygon grid (the voxelization itself is ours, with the same result: see
+  /// compare_seed_band()), then a closest-triangle wavefront into the interior and out to the
   /// exterior band: every voxel takes the closest of the triangles its 26 neighbours took, voxels
   /// accepted in order of distance (one voxel per iteration); then voxels near medial surfaces
   /// try the triangles of their 5^3 neighbourhood. Sphere of radius 64 voxels: max error 0.06
@@ -232,6 +233,23 @@ std::vector<VdbGridInfo> read_vdb_grid_infos(const std::string& path);
 /// The same description of the in-memory grids of `fields` (as write_grids() would name them,
 /// without the extra metadata).
 std::vector<VdbGridInfo> grid_infos(const Fields& fields);
+
+/// The kExactInterior seed band built twice at plan_fields()'s voxel size: as build_fields()
+/// builds it (its own voxelization where that applies, then meshToVolume's remaining steps) and
+/// by OpenVDB's meshToVolume alone, with the voxels that differ.
+struct SeedBandComparison {
+  bool voxelized_here = false;         ///< false: the mesh went to meshToVolume both times
+                                       ///< (fewer than 1000 triangles, or a huge triangle)
+  std::size_t flood_filled = 0;        ///< triangles voxelized by a flood fill (thin, or tall
+                                       ///< boxes) instead of bit rows
+  std::size_t band_voxels = 0;         ///< active voxels of the band
+  std::size_t differing_voxels = 0;    ///< distance, triangle or active state differ (0 expected)
+  double seconds = 0.0;                ///< build_fields()'s band
+  double seconds_mesh_to_volume = 0.0; ///< meshToVolume's
+};
+
+/// For tests and benchmarks: see SeedBandComparison.
+SeedBandComparison compare_seed_band(const SurfaceMesh& mesh, const FieldOptions& options);
 
 /// Benchmark floor: OpenVDB's plain narrow-band meshToLevelSet (half-width 3 voxels) of `mesh`
 /// at the voxel size plan_fields() derives. Returns its time (seconds_sdf, seconds_total), active
