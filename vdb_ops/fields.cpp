@@ -369,10 +369,13 @@ FloatGrid::Ptr mesh_to_volume(const IndexMesh& m, const openvdb::math::Transform
 
 using Int32Leaf = openvdb::Int32Tree::LeafNodeType;
 
-/// One voxelization leaf: squared distances (active where measured) and triangle indices.
+/// One voxelization leaf: squared distances (active where measured) and triangle indices, with
+/// their buffers (LeafBuffer::data() is a call per voxel otherwise).
 struct BandLeaf {
   std::unique_ptr<FloatLeaf> dist;
   std::unique_ptr<Int32Leaf> index;
+  float* d2 = nullptr;
+  std::int32_t* id = nullptr;
 };
 
 /// Leaf coordinates (origin / 8) packed into 63 bits; |voxel coordinates| < 2^23.
@@ -399,6 +402,8 @@ struct BandVoxels {
       BandLeaf leaf{std::make_unique<FloatLeaf>(origin, std::numeric_limits<float>::max(), false),
                     std::make_unique<Int32Leaf>(origin, std::int32_t(openvdb::util::INVALID_IDX),
                                                 false)};
+      leaf.d2 = leaf.dist->buffer().data();
+      leaf.id = leaf.index->buffer().data();
       leaves.emplace_back(key, std::move(leaf));
     }
     return leaves[it->second].second;
@@ -419,15 +424,13 @@ float band_distance2(const Coord& ijk, const openvdb::Vec3d& a, const openvdb::V
 void band_keep(BandLeaf& leaf, const Coord& ijk, float d2, std::int32_t index) {
   if (std::isnan(d2)) return;
   const openvdb::Index pos = FloatLeaf::coordToOffset(ijk);
-  float* dist = leaf.dist->buffer().data();
-  std::int32_t* idx = leaf.index->buffer().data();
-  if (d2 < dist[pos]) {
-    dist[pos] = d2;
-    idx[pos] = index;
+  if (d2 < leaf.d2[pos]) {
+    leaf.d2[pos] = d2;
+    leaf.id[pos] = index;
     leaf.dist->setActiveState(pos, true);
     leaf.index->setActiveState(pos, true);
-  } else if (d2 == dist[pos]) {
-    idx[pos] = std::min(idx[pos], index);
+  } else if (d2 == leaf.d2[pos]) {
+    leaf.id[pos] = std::min(leaf.id[pos], index);
   }
 }
 
