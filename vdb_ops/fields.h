@@ -64,7 +64,7 @@ enum class SdfMethod {
   /// accepted in order of distance (one voxel per iteration); then voxels near medial surfaces
   /// try the triangles of their 5^3 neighbourhood. Sphere of radius 64 voxels: max error 0.06
   /// voxels (the polygonal sphere's own). Measured (tests/bench, all fields): see
-  /// docs/benchmarks.md, "Fields against the floor after the voxelized seed band".
+  /// docs/benchmarks.md, "Fields: the seed band's voxelization by bit rows".
   kExactInterior,
   /// OpenVDB meshToVolume with an unbounded interior band (its own layer-by-layer closest-polygon
   /// expansion), then one pass in which every voxel also tries the triangles its 26 neighbours
