@@ -38,6 +38,7 @@
 #include <new>
 #include <set>
 #include <sstream>
+#include <tuple>
 #include <unordered_map>
 
 #include "core/atomic_file.h"
@@ -465,7 +466,9 @@ void band_voxelize_triangle(const IndexMesh& m, std::size_t index, BandVoxels& o
 
   const openvdb::Vec3d ab = b - a, ac = c - a, cross = ab.cross(ac);
   const double d00 = ab.dot(ab), d01 = ab.dot(ac), d11 = ac.dot(ac);
-  const bool thin = !(cross.lengthSqr() > 1e-12 * d00 * d11);  // also NaN
+  // Slivers (sin^2 of the angle at a below 1e-8, or NaN) leave the bound's barycentric
+  // coordinates too ill-conditioned to trust near 0.75: they take the flood fill.
+  const bool thin = !(cross.lengthSqr() > 1e-8 * d00 * d11);
   if (nz <= 64 && volume <= (std::size_t(1) << 21) && !thin) {
     // Lower bound of the squared distance: to the plane, plus within it to the farthest edge
     // line the projection lies beyond (heights over the edges times the barycentric deficit).
@@ -531,6 +534,8 @@ void band_voxelize_triangle(const IndexMesh& m, std::size_t index, BandVoxels& o
   out.bits.assign((volume + 63) / 64, 0);
   auto first_visit = [&](const Coord& ijk) {
     const Coord d = ijk - lo;
+    // (Outside the box only if rounding put an intersecting voxel beyond sqrt(0.75) + 1.)
+    if (d[0] < 0 || d[1] < 0 || d[2] < 0 || d[0] >= nx || d[1] >= ny || d[2] >= nz) return false;
     const std::size_t i =
         (std::size_t(d[0]) * std::size_t(ny) + std::size_t(d[1])) * std::size_t(nz) +
         std::size_t(d[2]);
@@ -1953,7 +1958,7 @@ SeedBandComparison compare_seed_band(const SurfaceMesh& mesh, const FieldOptions
   out.voxelized_here = flood_filled != std::numeric_limits<std::size_t>::max();
   out.flood_filled = out.voxelized_here ? flood_filled : 0;
   out.band_voxels = std::size_t(ours->activeVoxelCount());
-  // Every voxel of either grid's leaves (and the tiles' values at their origins).
+  // Every voxel of either grid's leaves, then every tile (value and state) of either tree.
   auto differ = [&](const Coord& c) {
     return ours->tree().getValue(c) != theirs->tree().getValue(c) ||
            ours->tree().isValueOn(c) != theirs->tree().isValueOn(c) ||
@@ -1976,6 +1981,18 @@ SeedBandComparison compare_seed_band(const SurfaceMesh& mesh, const FieldOptions
       out.differing_voxels += differ(Coord(o[0] + (i >> 6), o[1] + (i >> 3 & 7), o[2] + (i & 7)));
     }
   }
+  auto tiles = [](const auto& tree) {
+    std::vector<std::tuple<int, int, int, double, bool>> out;
+    auto it = tree.cbeginValueAll();
+    it.setMaxDepth(std::decay_t<decltype(tree)>::ValueAllCIter::LEAF_DEPTH - 1);
+    for (; it; ++it) {
+      const Coord c = it.getCoord();
+      out.emplace_back(c[0], c[1], c[2], double(*it), it.isValueOn());
+    }
+    return out;
+  };
+  if (tiles(ours->tree()) != tiles(theirs->tree())) ++out.differing_voxels;
+  if (tiles(ours_index.tree()) != tiles(their_index.tree())) ++out.differing_voxels;
   if (ours->tree().background() != theirs->tree().background()) ++out.differing_voxels;
   return out;
 }

@@ -243,7 +243,8 @@ struct SeedBandComparison {
   std::size_t flood_filled = 0;        ///< triangles voxelized by a flood fill (thin, or tall
                                        ///< boxes) instead of bit rows
   std::size_t band_voxels = 0;         ///< active voxels of the band
-  std::size_t differing_voxels = 0;    ///< distance, triangle or active state differ (0 expected)
+  std::size_t differing_voxels = 0;    ///< distance, triangle or active state differ, plus one
+                                       ///< per tree whose tiles differ (0 expected)
   double seconds = 0.0;                ///< build_fields()'s band
   double seconds_mesh_to_volume = 0.0; ///< meshToVolume's
 };
