@@ -1,7 +1,8 @@
 // fields.cpp — see fields.h. The only translation unit that includes OpenVDB's tools.
 //
-// Layout: options and plan; the SDF methods (closest-triangle wavefront, meshToVolume interior,
-// fast sweeping); the per-leaf gradient/flux pass; the probe;
+// Layout: options and plan; the SDF methods (the seed band's voxelization and the
+// closest-triangle wavefront, meshToVolume interior, fast sweeping); the per-leaf gradient/flux
+// pass; the probe;
 // .vdb reading and writing. Parallel loops run over leaf nodes in the tree's own (fixed) order and
 // write one output slot per leaf, merged serially in that order, so results do not depend on the
 // thread count.

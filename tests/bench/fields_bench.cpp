@@ -24,7 +24,6 @@
 #include <tbb/global_control.h>
 
 #include <algorithm>
-#include <type_traits>
 #include <array>
 #include <chrono>
 #include <cmath>
@@ -37,6 +36,7 @@
 #include <memory>
 #include <random>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
