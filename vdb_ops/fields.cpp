@@ -1962,11 +1962,12 @@ SeedBandComparison compare_seed_band(const SurfaceMesh& mesh, const FieldOptions
   out.flood_filled = out.voxelized_here ? flood_filled : 0;
   out.band_voxels = std::size_t(ours->activeVoxelCount());
   // Every voxel of either grid's leaves, then every tile (value and state) of either tree.
+  FloatGrid::ConstAccessor a = ours->getConstAccessor(), b = theirs->getConstAccessor();
+  openvdb::Int32Grid::ConstAccessor ai = ours_index.getConstAccessor(),
+                                    bi = their_index.getConstAccessor();
   auto differ = [&](const Coord& c) {
-    return ours->tree().getValue(c) != theirs->tree().getValue(c) ||
-           ours->tree().isValueOn(c) != theirs->tree().isValueOn(c) ||
-           ours_index.tree().getValue(c) != their_index.tree().getValue(c) ||
-           ours_index.tree().isValueOn(c) != their_index.tree().isValueOn(c);
+    return a.getValue(c) != b.getValue(c) || a.isValueOn(c) != b.isValueOn(c) ||
+           ai.getValue(c) != bi.getValue(c) || ai.isValueOn(c) != bi.isValueOn(c);
   };
   std::set<std::array<int, 3>> leaves;
   for (const FloatGrid* g : {ours.get(), theirs.get()}) {
