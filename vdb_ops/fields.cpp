@@ -474,7 +474,8 @@ void band_voxelize_triangle(const IndexMesh& m, std::size_t index, BandVoxels& o
   const bool thin = !(cross.lengthSqr() > 1e-8 * d00 * d11);
   if (nz <= 64 && volume <= (std::size_t(1) << 21) && !thin) {
     // Lower bound of the squared distance: to the plane, plus within it to the farthest edge
-    // line the projection lies beyond (heights over the edges times the barycentric deficit).
+    // line the projection lies beyond (heights over the edges times the barycentric deficit;
+    // lower_to_closest()'s bound, in double: it decides which voxels are measured at all).
     const double len = std::sqrt(cross.lengthSqr()), inv = 1.0 / (d00 * d11 - d01 * d01);
     const openvdb::Vec3d n = cross / len, bv = (ab * d11 - ac * d01) * inv,
                          bw = (ac * d00 - ab * d01) * inv;
@@ -631,14 +632,14 @@ std::size_t band_voxels(const IndexMesh& m, FloatTree& dist, openvdb::Int32Tree&
 /// The seed band: meshToVolume(m, xform, ex, in, DISABLE_RENORMALIZATION, index_grid) with
 /// band_voxels() for its voxelization where that applies, the same result either way. Widths in
 /// voxels, at most 2 (meshToVolume widens wider bands after the steps below). `flood_filled`,
-/// if given, receives the number of triangles voxelized by the flood fill (SIZE_MAX when
-/// meshToVolume did everything).
+/// if given, receives the number of triangles voxelized by the flood fill (0 when meshToVolume
+/// did everything).
 FloatGrid::Ptr mesh_to_band(const IndexMesh& m, const openvdb::math::Transform& xform, float ex,
                             float in, openvdb::Int32Grid& index_grid,
                             std::size_t* flood_filled = nullptr) {
   namespace internal = openvdb::tools::mesh_to_volume_internal;
   if (!(ex <= 2.0f && in <= 2.0f) || !band_voxels_apply(m)) {
-    if (flood_filled) *flood_filled = std::numeric_limits<std::size_t>::max();
+    if (flood_filled) *flood_filled = 0;
     return mesh_to_volume(m, xform, ex, in, &index_grid, openvdb::tools::DISABLE_RENORMALIZATION);
   }
   // From here on, meshToVolume's own steps for a signed band no wider than two voxels.
@@ -1958,8 +1959,8 @@ SeedBandComparison compare_seed_band(const SurfaceMesh& mesh, const FieldOptions
                                                &their_index,
                                                openvdb::tools::DISABLE_RENORMALIZATION);
   out.seconds_mesh_to_volume = seconds_since(t0);
-  out.voxelized_here = flood_filled != std::numeric_limits<std::size_t>::max();
-  out.flood_filled = out.voxelized_here ? flood_filled : 0;
+  out.voxelized_here = band_voxels_apply(im);
+  out.flood_filled = flood_filled;
   out.band_voxels = std::size_t(ours->activeVoxelCount());
   // Every voxel of either grid's leaves, then every tile (value and state) of either tree.
   FloatGrid::ConstAccessor a = ours->getConstAccessor(), b = theirs->getConstAccessor();
@@ -1970,16 +1971,15 @@ SeedBandComparison compare_seed_band(const SurfaceMesh& mesh, const FieldOptions
            ai.getValue(c) != bi.getValue(c) || ai.isValueOn(c) != bi.isValueOn(c);
   };
   std::set<std::array<int, 3>> leaves;
-  for (const FloatGrid* g : {ours.get(), theirs.get()}) {
-    for (auto it = g->tree().cbeginLeaf(); it; ++it) {
+  auto add_leaves = [&](const auto& tree) {
+    for (auto it = tree.cbeginLeaf(); it; ++it) {
       leaves.insert({it->origin()[0], it->origin()[1], it->origin()[2]});
     }
-  }
-  for (const openvdb::Int32Grid* g : {&ours_index, &their_index}) {
-    for (auto it = g->tree().cbeginLeaf(); it; ++it) {
-      leaves.insert({it->origin()[0], it->origin()[1], it->origin()[2]});
-    }
-  }
+  };
+  add_leaves(ours->tree());
+  add_leaves(theirs->tree());
+  add_leaves(ours_index.tree());
+  add_leaves(their_index.tree());
   for (const auto& o : leaves) {
     for (int i = 0; i < 512; ++i) {
       out.differing_voxels += differ(Coord(o[0] + (i >> 6), o[1] + (i >> 3 & 7), o[2] + (i & 7)));
