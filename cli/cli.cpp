@@ -4,8 +4,6 @@
 #include "cli/cli.h"
 
 #include <CLI/CLI.hpp>
-#include <nlohmann/json.hpp>
-#include <tbb/global_control.h>
 
 #include <algorithm>
 #include <chrono>
@@ -15,7 +13,6 @@
 #include <iostream>
 #include <memory>
 #include <new>
-#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -23,19 +20,9 @@
 #include <signal.h>
 #include <unistd.h>
 
-#include "core/assemble.h"
 #include "core/atomic_file.h"
-#include "core/errors.h"
-#include "core/inner.h"
-#include "core/paths_io.h"
-#include "core/quality.h"
-#include "core/shell_checks.h"
-#include "core/trace.h"
-#include "core/validate.h"
-#include "core/validity.h"
 #include "core/writers.h"
-#include "vdb_ops/fields.h"
-#include "vdb_ops/point_index_vdb.h"
+#include "vdb_shell/vdb_shell.h"
 
 #ifndef VDB_SHELL_VERSION
 #define VDB_SHELL_VERSION "unknown"
@@ -44,39 +31,40 @@
 namespace vdb_shell {
 namespace {
 
+enum class ProgressMode { kNone, kLines, kBar };
+
 /// What the user said on the command line (defaults are the documented ones).
 struct CliOptions {
   std::vector<std::string> inputs;
   std::string input;  ///< the input being processed (one of `inputs`)
   std::string output;
   std::string format = "vtu";
-  std::string level_set;
-  std::string grid_name;
   std::string grids;
   std::string paths;
   std::string inner;
   std::string report;
   int msh_version = 41;
-  int threads = 0;
   std::string integrator = "rk2";
   bool quiet = false;
   bool verbose = false;
   bool progress = false;
-  bool err_is_terminal = false;  ///< stderr is a terminal: progress is on unless --quiet
+  bool no_progress = false;
+  bool err_is_terminal = false;  ///< stderr is a terminal: a progress bar unless --quiet
   // Which options were given explicitly (contradiction checks).
   bool resolution_given = false;
   bool format_given = false;
   bool msh_version_given = false;
   bool grid_given = false;
   bool adaptivity_given = false;
-  double adaptivity = 0.0;  ///< meshing a .vdb INPUT: 0 voxel-sized quads .. 1 fewest polygons
-  FieldOptions fields;
-  TraceOptions trace;
-  ThicknessOptions thickness;
-  ValidityOptions validity;
+  ShellOptions shell;  ///< every option of the pipeline (--level-set, --grid, -j among them)
 
   bool batch() const { return inputs.size() > 1; }
-  bool show_progress() const { return !quiet && (progress || err_is_terminal); }
+  /// A bar redrawn in place on a terminal, one line per stage with --progress elsewhere.
+  ProgressMode progress_mode() const {
+    if (quiet || no_progress) return ProgressMode::kNone;
+    if (err_is_terminal) return ProgressMode::kBar;
+    return progress ? ProgressMode::kLines : ProgressMode::kNone;
+  }
 };
 
 using Clock = std::chrono::steady_clock;
@@ -98,32 +86,50 @@ std::string fmt_seconds(double v) {
 
 std::string fmt(const Vec3d& v) { return "(" + fmt(v.x) + ", " + fmt(v.y) + ", " + fmt(v.z) + ")"; }
 
-/// Stage timer and progress printer: "[2/6] fields ... 0.42 s" on stderr, one line per stage.
+/// Stage timer and progress printer on stderr. Lines: "[2/6] fields ... 0.42 s", one per
+/// stage. Bar: the current stage redrawn in place, "[3/6] trace  42%  1.2 s", then the same
+/// line as Lines mode once the stage ends.
 class Progress {
  public:
-  Progress(std::ostream& err, bool show, int total, std::string prefix)
-      : err_(err), show_(show), total_(total), prefix_(std::move(prefix)) {}
+  Progress(std::ostream& err, ProgressMode mode, int total, std::string prefix)
+      : err_(err), mode_(mode), total_(total), prefix_(std::move(prefix)) {}
   ~Progress() {
-    if (open_ && show_) err_ << " failed\n" << std::flush;
+    if (open_ && mode_ != ProgressMode::kNone) err_ << " failed\n" << std::flush;
   }
   Progress(const Progress&) = delete;
   Progress& operator=(const Progress&) = delete;
 
-  void start(const char* name) {
+  void start(const std::string& name) {
     name_ = name;
     ++index_;
     open_ = true;
     t0_ = Clock::now();
-    if (show_)
-      err_ << prefix_ << "[" << index_ << "/" << total_ << "] " << name << " ..." << std::flush;
+    if (mode_ != ProgressMode::kNone) err_ << head() << " ..." << std::flush;
   }
   /// Ends the current stage; returns its seconds.
   double stop() {
     const double s = seconds_since(t0_);
     open_ = false;
-    if (show_) err_ << " " << fmt_seconds(s) << " s\n" << std::flush;
+    if (mode_ == ProgressMode::kBar) err_ << "\r\033[K" << head() << " ...";
+    if (mode_ != ProgressMode::kNone) err_ << " " << fmt_seconds(s) << " s\n" << std::flush;
     timings_.emplace_back(name_, s);
     return s;
+  }
+  /// A library stage's report (RunControl::progress): 0 starts it, 1 ends it.
+  void update(const std::string& stage, double fraction) {
+    if (!open_ || stage != name_) {
+      start(stage);
+      return;
+    }
+    if (fraction >= 1.0) {
+      stop();
+      return;
+    }
+    if (mode_ != ProgressMode::kBar) return;
+    char line[64];
+    std::snprintf(line, sizeof line, " %3d%%  %s s", static_cast<int>(100 * fraction),
+                  fmt_seconds(seconds_since(t0_)).c_str());
+    err_ << "\r\033[K" << head() << line << std::flush;
   }
   /// "read 0.01 s, fields 0.42 s, ..."
   std::string timings() const {
@@ -134,8 +140,12 @@ class Progress {
   }
 
  private:
+  std::string head() const {
+    return prefix_ + "[" + std::to_string(index_) + "/" + std::to_string(total_) + "] " + name_;
+  }
+
   std::ostream& err_;
-  bool show_;
+  ProgressMode mode_;
   int total_;
   std::string prefix_;
   std::string name_;
@@ -171,14 +181,16 @@ void check_contradictions(const CliOptions& o) {
   namespace fs = std::filesystem;
   if (o.quiet && o.progress)
     throw InputError("--quiet and --progress contradict each other: choose one of them");
-  if (o.resolution_given && o.fields.voxel_size > 0)
+  if (o.progress && o.no_progress)
+    throw InputError("--progress and --no-progress contradict each other: choose one of them");
+  if (o.resolution_given && o.shell.fields.voxel_size > 0)
     throw InputError("--voxel-size and --resolution both set the voxel size: give only one of "
                      "them");
   const bool vdb_inputs = std::all_of(o.inputs.begin(), o.inputs.end(), is_vdb);
-  if (o.grid_given && o.level_set.empty() && !vdb_inputs)
-    throw InputError("--grid " + o.grid_name + " names a grid of --level-set or of a .vdb "
+  if (o.grid_given && o.shell.level_set.empty() && !vdb_inputs)
+    throw InputError("--grid " + o.shell.grid_name + " names a grid of --level-set or of a .vdb "
                      "INPUT: give --level-set FILE.vdb too, or drop --grid");
-  if (!o.level_set.empty() && std::any_of(o.inputs.begin(), o.inputs.end(), is_vdb))
+  if (!o.shell.level_set.empty() && std::any_of(o.inputs.begin(), o.inputs.end(), is_vdb))
     throw InputError("a .vdb INPUT is its own level set: drop --level-set");
   if (o.adaptivity_given && !std::any_of(o.inputs.begin(), o.inputs.end(), is_vdb))
     throw InputError("--adaptivity applies to meshing a .vdb INPUT: drop it for mesh files");
@@ -242,7 +254,7 @@ void check_batch(const CliOptions& o) {
   if (o.output.empty())
     throw InputError("several inputs: give -o DIR, the folder that receives one shell per input "
                      "(or run vdb_shell once per input to see each summary)");
-  if (!o.grids.empty() || !o.paths.empty() || !o.inner.empty() || !o.level_set.empty())
+  if (!o.grids.empty() || !o.paths.empty() || !o.inner.empty() || !o.shell.level_set.empty())
     throw InputError("--grids, --paths, --inner and --level-set take a single input: run "
                      "vdb_shell once per input for them");
   tet_format_from_path("x." + o.format, o.msh_version);
@@ -268,13 +280,24 @@ void check_batch(const CliOptions& o) {
 
 /// What one run of the pipeline produced.
 struct RunOutcome {
-  bool shell = false;             ///< false: summary or --grids only, nothing below is set
-  nlohmann::ordered_json report;  ///< the JSON report
-  std::string summary;            ///< the one-line summary (without "vdb_shell: ")
+  bool shell = false;   ///< false: summary or --grids only, nothing below is set
+  std::string report;   ///< the JSON report
+  std::string summary;  ///< the one-line summary (without "vdb_shell: ")
   std::size_t tets = 0;
   double coverage = 0;
   double seconds = 0;
 };
+
+/// The one-line summary of a shell on stderr.
+std::string summary_line(const std::string& output, const ShellResult& r, double seconds) {
+  const std::size_t* count = r.traces.count;
+  return output + ": " + std::to_string(r.counts.tets) + " tets from " +
+         std::to_string(r.input.stats.faces) + " faces, coverage " + fmt(r.quality.coverage) +
+         ", quality min " + fmt(r.quality.min_quality) + " median " +
+         fmt(r.quality.median_quality) + ", stops critical " + std::to_string(count[0]) +
+         " merge " + std::to_string(count[1]) + " flux " + std::to_string(count[2]) + " cap " +
+         std::to_string(count[3]) + ", " + fmt(seconds) + " s";
+}
 
 /// Runs the whole pipeline on `opt.input` (options already checked). Prints the summary to `out`
 /// when there is no output; writes the outputs and the --report file otherwise.
@@ -284,16 +307,18 @@ RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& 
   const bool shell_wanted = !opt.output.empty();
   // Stages: read; with --grids alone also fields, trace, write; with -o all six.
   const int stages = shell_wanted ? 6 : (opt.grids.empty() ? 1 : 4);
-  Progress progress(err, opt.show_progress(), stages, progress_prefix);
+  Progress progress(err, opt.progress_mode(), stages, progress_prefix);
   RunOutcome outcome;
 
+  ShellOptions shell = opt.shell;
+  shell.traces_only = !shell_wanted;
+  shell.keep_fields = !opt.grids.empty();
   progress.start("read");
   // A .vdb input is a level set: its zero crossing is the surface, and it is also the field.
   const bool vdb_input = is_vdb(opt.input);
   const LoadedSurface surface =
-      vdb_input ? make_surface(level_set_to_soup(opt.input, opt.grid_name, opt.adaptivity),
-                               opt.input)
-                : load_surface(opt.input);
+      vdb_input ? load_level_set_surface(opt.input, shell) : load_surface(opt.input);
+  if (vdb_input) shell.level_set = opt.input;
   const double t_read = progress.stop();
   if (!opt.quiet)
     for (const std::string& n : surface.notices) err << "vdb_shell: note: " << n << "\n";
@@ -301,187 +326,50 @@ RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& 
     print_summary(out, opt.input, surface);
     return outcome;
   }
-  const SurfaceMesh& mesh = surface.mesh;
 
-  progress.start("fields");
-  const std::string level_set = vdb_input ? opt.input : opt.level_set;
-  // The flux grid stores |flux| >= flux_min only: keep it at most rho / 2 (fields.h) so a
-  // smaller --flux-threshold still sees every value it asks about.
-  FieldOptions field_options = opt.fields;
-  field_options.flux_min =
-      std::clamp(0.5 * opt.trace.flux_threshold, 1e-3, field_options.flux_min);
-  const std::unique_ptr<Fields> fields =
-      level_set.empty() ? build_fields(mesh, field_options)
-                        : fields_from_level_set(level_set, opt.grid_name, mesh, field_options);
-  const double t_fields = progress.stop();
+  RunControl control;
+  control.progress = [&progress](const std::string& stage, double fraction) {
+    progress.update(stage, fraction);
+  };
+  const ShellResult r = build_shell(surface, shell, control);
+  if (!opt.quiet)
+    for (std::size_t i = surface.notices.size(); i < r.notices.size(); ++i)
+      err << "vdb_shell: note: " << r.notices[i] << "\n";
   if (opt.verbose)
-    err << "vdb_shell: fields: voxel " << fmt(fields->voxel_size()) << ", "
-        << fields->stats().sdf_active_voxels << " SDF voxels, "
-        << fields->stats().flux_active_voxels << " flux voxels, " << fmt(t_fields) << " s\n";
-
-  progress.start("trace");
-  const TraceResult traces = trace_paths(mesh, *fields, opt.trace, make_vdb_point_index);
-  const double t_trace = progress.stop();
+    err << "vdb_shell: fields: voxel " << fmt(r.field_stats.voxel_size) << ", "
+        << r.field_stats.sdf_active_voxels << " SDF voxels, "
+        << r.field_stats.flux_active_voxels << " flux voxels, " << fmt(r.timings.fields)
+        << " s\n";
 
   if (!shell_wanted) {  // --grids only: the fields and the traces as points
     progress.start("write");
-    write_grids(opt.grids, *fields, fields->parameters(), &traces);
+    write_fields(opt.grids, r);
     progress.stop();
     if (!opt.quiet) err << "vdb_shell: wrote " << opt.grids << "\n";
     if (opt.verbose) err << "vdb_shell: timings: " << progress.timings() << "\n";
     return outcome;
   }
 
-  progress.start("inner");
-  const InnerVertices inner = place_inner_vertices(mesh, traces, opt.thickness);
-  const double t_inner = progress.stop();
-  progress.start("validity");
-  const ValidShell valid = make_valid_shell(mesh, traces, inner, opt.validity);
-  const AssembleResult& shell = valid.shell;
-  const ShellCheckResult& checks = valid.checks;
-  const QualitySummary quality = summarize_quality(mesh, shell.mesh);
-  const double t_assemble = t_inner + progress.stop();
-  if (!checks.valid()) {
-    // A surface that crosses itself bounds no single volume: bad input, not a search failure.
-    const auto crossing = surface_self_intersections(mesh, 1);
-    if (!crossing.empty()) {
-      const std::uint32_t f = crossing[0][0], g = crossing[0][1];
-      const Vec3d& p = mesh.points[mesh.triangles[f][0]];
-      std::ostringstream message;
-      message << opt.input << ": the surface intersects itself (triangles " << f << " and " << g
-              << ", near (" << p.x << ", " << p.y << ", " << p.z
-              << ")), so it bounds no single volume and no valid shell exists; repair it (for a "
-                 ".vdb input, a lower --adaptivity); nothing was written";
-      throw InputError(message.str());
-    }
-  }
-  if (!checks.valid() && !valid.folded_vertices.empty()) {
-    const std::uint32_t v = valid.folded_vertices.front();
-    const Vec3d& p = mesh.points[v];
-    std::ostringstream message;
-    const std::size_t n = valid.folded_vertices.size();
-    message << opt.input << ": " << n << (n == 1 ? " surface vertex is" : " surface vertices are")
-            << " folded: the incident faces have no common inward direction (first: vertex " << v
-            << " at (" << p.x << ", " << p.y << ", " << p.z
-            << ")); keeping them on the surface did not make the shell valid ("
-            << describe_problems(checks)
-            << "; likely a fold sharper than the thinnest shell); "
-               "remesh the surface around them (for a .vdb input, a lower --adaptivity); nothing "
-               "was written";
-    std::string text = message.str();
-    std::replace(text.begin(), text.end(), '\n', ';');
-    throw InputError(text);
-  }
-  if (!checks.valid()) {
-    std::string message = opt.input + ": could not make the shell valid after " +
-                          std::to_string(valid.rounds) + " rounds (" + describe_problems(checks) +
-                          ")" +
-                          (valid.floor_valid ? "" : "; the thinnest shell is invalid too: " +
-                                                        valid.floor_problems) +
-                          "; nothing was written — please report this input";
-    while (!message.empty() && message.back() == '\n') message.pop_back();
-    std::replace(message.begin(), message.end(), '\n', ';');
-    throw InternalError(message);
-  }
-
   progress.start("write");
-  write_tet_mesh(opt.output, shell.mesh, tet_format_from_path(opt.output, opt.msh_version));
-  if (!opt.grids.empty()) write_grids(opt.grids, *fields, fields->parameters(), &traces);
-  if (!opt.paths.empty()) write_paths_vtk(opt.paths, traces);
-  if (!opt.inner.empty()) {
-    // The inner side as a surface; a vertex kept on the surface is its own inner vertex.
-    SurfaceMesh inner_surface;
-    inner_surface.points = valid.input.inner_points;
-    std::vector<std::uint32_t> id = valid.input.inner_id;
-    for (std::uint32_t v = 0; v < id.size(); ++v)
-      if (id[v] == kOnSurface) {
-        id[v] = static_cast<std::uint32_t>(inner_surface.points.size());
-        inner_surface.points.push_back(mesh.points[v]);
-      }
-    for (const Triangle& t : mesh.triangles)
-      inner_surface.triangles.push_back({id[t[0]], id[t[2]], id[t[1]]});
-    write_surface(opt.inner, inner_surface);
-  }
+  write_shell(opt.output, r, opt.msh_version);
+  if (!opt.grids.empty()) write_fields(opt.grids, r);
+  if (!opt.paths.empty()) write_traces(opt.paths, r);
+  if (!opt.inner.empty()) write_inner_surface(opt.inner, r);
   const double t_write = progress.stop();
   const double t_all = seconds_since(t_total);
 
-  nlohmann::ordered_json& j = outcome.report;
-  j["input"] = {{"file", opt.input},
-                {"vertices", surface.stats.vertices},
-                {"faces", surface.stats.faces},
-                {"components", surface.stats.components},
-                {"genus", surface.stats.genus},
-                {"enclosed_volume", surface.stats.enclosed_volume},
-                {"flipped", surface.flipped}};
-  j["fields"] = {{"voxel_size", fields->voxel_size()},
-                 {"strategy", fields->stats().strategy},
-                 {"sdf_active_voxels", fields->stats().sdf_active_voxels},
-                 {"flux_active_voxels", fields->stats().flux_active_voxels},
-                 {"seconds", {{"sdf", fields->stats().seconds_sdf},
-                              {"interior", fields->stats().seconds_fill +
-                                               fields->stats().seconds_refine},
-                              {"flux", fields->stats().seconds_flux},
-                              {"gradient", fields->stats().seconds_gradient}}}};
-  j["trace"] = {{"step", traces.parameters.step},
-                {"point_size", traces.parameters.point_size},
-                {"integrator", to_string(opt.trace.integrator)},
-                {"planar_vertices",
-                 std::count(traces.planar.begin(), traces.planar.end(), std::uint8_t{1})},
-                {"samples", traces.samples.size()}};
-  j["stop_reasons"] = {{"critical", traces.count[0]},
-                       {"merge", traces.count[1]},
-                       {"flux", traces.count[2]},
-                       {"cap", traces.count[3]}};
-  j["shell"] = {{"file", opt.output},
-                {"tets", shell.mesh.tets.size()},
-                {"points", shell.mesh.points.size()},
-                {"coverage", quality.coverage},
-                {"shell_volume", quality.shell_volume},
-                {"inverted_tets", checks.inverted_tets},
-                {"zero_volume_tets", checks.zero_volume_tets},
-                {"intersecting_tet_pairs", checks.overlapping_pairs},
-                {"outside_inner_vertices", checks.outside_inner_vertices},
-                {"missing_surface_triangles", checks.missing_triangles},
-                {"dropped_degenerate_tets", shell.dropped_degenerate_tets},
-                {"collapsed_prisms", shell.collapsed_prisms},
-                {"welded_vertices", inner.welded - std::min(inner.welded, valid.unwelded)},
-                {"thickness_limited_vertices", inner.limited},
-                {"valid", checks.valid()}};
-  j["validity"] = {{"rounds", valid.rounds},
-                   {"checks", valid.checks_run},
-                   {"moved_back_vertices", valid.moved_back},
-                   {"moved_back_mean_fraction", valid.moved_back_mean},
-                   {"unwelded_vertices", valid.unwelded},
-                   {"on_surface_vertices", valid.on_surface.size()},
-                   {"cap_faces", valid.cap_faces},
-                   {"floor_drops", valid.floor_drops},
-                   {"floor_valid", valid.floor_valid},
-                   {"seconds", valid.seconds}};
-  j["quality"] = {{"min", quality.min_quality},
-                  {"median", quality.median_quality},
-                  {"mean", quality.mean_quality},
-                  {"min_dihedral_deg", quality.min_dihedral_deg},
-                  {"non_positive", quality.non_positive},
-                  {"histogram", quality.histogram}};
-  j["timings_s"] = {{"read", t_read},     {"fields", t_fields}, {"trace", t_trace},
-                    {"assemble", t_assemble}, {"check", checks.seconds},
-                    {"write", t_write},   {"total", t_all}};
+  ReportFiles files;
+  files.shell = opt.output;
+  outcome.report = report_json(r, files, t_read, t_write);
   if (!opt.report.empty())
-    write_file_atomically(opt.report, [&](std::ostream& os) { os << j.dump(2) << "\n"; });
+    write_file_atomically(opt.report, [&](std::ostream& os) { os << outcome.report; });
   if (opt.verbose) err << "vdb_shell: timings: " << progress.timings() << "\n";
 
   outcome.shell = true;
-  outcome.tets = shell.mesh.tets.size();
-  outcome.coverage = quality.coverage;
+  outcome.tets = r.counts.tets;
+  outcome.coverage = r.quality.coverage;
   outcome.seconds = t_all;
-  outcome.summary = opt.output + ": " + std::to_string(shell.mesh.tets.size()) + " tets from " +
-                    std::to_string(mesh.triangles.size()) + " faces, coverage " +
-                    fmt(quality.coverage) + ", quality min " + fmt(quality.min_quality) +
-                    " median " + fmt(quality.median_quality) + ", stops critical " +
-                    std::to_string(traces.count[0]) + " merge " +
-                    std::to_string(traces.count[1]) + " flux " +
-                    std::to_string(traces.count[2]) + " cap " +
-                    std::to_string(traces.count[3]) + ", " + fmt(t_all) + " s";
+  outcome.summary = summary_line(opt.output, r, t_all);
   return outcome;
 }
 
@@ -490,9 +378,9 @@ int run_single(CliOptions opt, std::ostream& out, std::ostream& err) {
   opt.input = opt.inputs.front();
   check_outputs(opt);
   const RunOutcome r = run_pipeline(opt, out, err, "");
-  if (!r.shell) return kExitOk;
-  if (!opt.quiet) err << "vdb_shell: " << r.summary << "\n";
-  out << r.report.dump(2) << "\n";
+  if (!r.shell || opt.quiet) return kExitOk;
+  err << "vdb_shell: " << r.summary << "\n";
+  out << r.report;
   return kExitOk;
 }
 
@@ -545,7 +433,7 @@ int run_batch(const CliOptions& opt, std::ostream& out, std::ostream& err) {
 
 int run(CliOptions opt, std::ostream& out, std::ostream& err) {
   check_contradictions(opt);
-  opt.trace.integrator = parse_integrator(opt.integrator);
+  opt.shell.trace.integrator = parse_integrator(opt.integrator);
   return opt.batch() ? run_batch(opt, out, err) : run_single(opt, out, err);
 }
 
@@ -568,28 +456,28 @@ int run_cli_impl(int argc, const char* const* argv, std::ostream& out, std::ostr
       ->default_str("")
       ->required()
       ->group(in);
-  app.add_option("--level-set", opt.level_set,
+  app.add_option("--level-set", opt.shell.level_set,
                  "Use this .vdb level set as the distance field instead of building one")
       ->group(in);
-  app.add_option("--grid", opt.grid_name, "Grid of --level-set or of a .vdb INPUT to use "
+  app.add_option("--grid", opt.shell.grid_name, "Grid of --level-set or of a .vdb INPUT to use "
                                           "(default: 'surface', else the first level set)")
       ->group(in);
-  app.add_option("--adaptivity", opt.adaptivity,
+  app.add_option("--adaptivity", opt.shell.adaptivity,
                  "Meshing a .vdb INPUT: 0 keeps voxel-sized quads, up to 1 merges flat regions "
                  "into fewer faces")
       ->check(CLI::Range(0.0, 1.0))
       ->group(in);
 
   const char* fg = "Fields";
-  app.add_option("-r,--resolution", opt.fields.resolution,
+  app.add_option("-r,--resolution", opt.shell.fields.resolution,
                  "Voxels along the longest bounding-box side")
       ->check(CLI::Range(kMinResolution, 16384))
       ->group(fg);
-  app.add_option("--voxel-size", opt.fields.voxel_size,
+  app.add_option("--voxel-size", opt.shell.fields.voxel_size,
                  "Voxel size in input units; overrides --resolution (0: use --resolution)")
       ->check(CLI::NonNegativeNumber)
       ->group(fg);
-  app.add_option("--max-memory", opt.fields.max_memory_gb,
+  app.add_option("--max-memory", opt.shell.fields.max_memory_gb,
                  "Refuse field builds estimated above this many GiB")
       ->check(CLI::PositiveNumber)
       ->group(fg);
@@ -598,22 +486,22 @@ int run_cli_impl(int argc, const char* const* argv, std::ostream& out, std::ostr
       ->group(fg);
 
   const char* tg = "Tracing";
-  app.add_option("--planar-angle", opt.trace.planar_angle,
+  app.add_option("--planar-angle", opt.shell.trace.planar_angle,
                  "Degrees: a vertex is planar when its face normals lie within this angle")
       ->group(tg);
-  app.add_option("--step", opt.trace.step,
+  app.add_option("--step", opt.shell.trace.step,
                  "Step length in input units (paper: delta epsilon; 0: half a voxel)")
       ->group(tg);
-  app.add_option("--critical", opt.trace.critical,
+  app.add_option("--critical", opt.shell.trace.critical,
                  "c of eq. 4: stop where |grad phi|^2 < c |grad phi(p)|^2")
       ->group(tg);
-  app.add_option("--point-size", opt.trace.point_size,
+  app.add_option("--point-size", opt.shell.trace.point_size,
                  "Merge distance in input units (paper: point size; 0: one voxel diagonal)")
       ->group(tg);
-  app.add_option("--flux-threshold", opt.trace.flux_threshold,
+  app.add_option("--flux-threshold", opt.shell.trace.flux_threshold,
                  "rho of eq. 8: planar traces stop where the average outward flux exceeds it")
       ->group(tg);
-  app.add_option("--merge-angle", opt.trace.merge_angle,
+  app.add_option("--merge-angle", opt.shell.trace.merge_angle,
                  "Degrees: traces meeting at a smaller angle run side by side, not merge")
       ->group(tg);
   app.add_option("--integrator", opt.integrator, "euler (the paper's), rk2 or rk4")
@@ -622,15 +510,15 @@ int run_cli_impl(int argc, const char* const* argv, std::ostream& out, std::ostr
   app.add_option("--paths", opt.paths, "Write the traces as VTK polylines (.vtk)")->group(tg);
 
   const char* th = "Thickness";
-  app.add_option("--max-thickness", opt.thickness.max_thickness,
+  app.add_option("--max-thickness", opt.shell.thickness.max_thickness,
                  "Largest thickness in input units, along the trace (0: as thick as possible)")
       ->check(CLI::NonNegativeNumber)
       ->group(th);
-  app.add_option("--thickness-edge-factor", opt.thickness.edge_factor,
+  app.add_option("--thickness-edge-factor", opt.shell.thickness.edge_factor,
                  "K: limit each vertex to K x its mean incident edge length (0: no limit)")
       ->check(CLI::NonNegativeNumber)
       ->group(th);
-  app.add_option("--min-quality", opt.validity.min_quality,
+  app.add_option("--min-quality", opt.shell.validity.min_quality,
                  "Step inner vertices back from tets of a lower volume-length quality, where they "
                  "can move (0: only from inverted ones)")
       ->check(CLI::Range(0.0, 0.5))
@@ -655,10 +543,13 @@ int run_cli_impl(int argc, const char* const* argv, std::ostream& out, std::ostr
   app.add_flag("-q,--quiet", opt.quiet, "Print only errors")->group(og);
   app.add_flag("-v,--verbose", opt.verbose, "Print more detail and per-stage timings")->group(og);
   app.add_flag("--progress", opt.progress,
-               "Print each stage and its seconds on stderr (default: when stderr is a terminal)")
+               "Print each stage and its seconds on stderr (on a terminal: a progress bar, the "
+               "default)")
+      ->group(og);
+  app.add_flag("--no-progress", opt.no_progress, "No progress output, even on a terminal")
       ->group(og);
 
-  app.add_option("-j,--threads", opt.threads, "Worker threads (0: all cores)")
+  app.add_option("-j,--threads", opt.shell.threads, "Worker threads (0: all cores)")
       ->check(CLI::NonNegativeNumber)
       ->group("Performance");
   app.set_version_flag("--version", std::string("vdb_shell ") + VDB_SHELL_VERSION);
@@ -678,10 +569,6 @@ int run_cli_impl(int argc, const char* const* argv, std::ostream& out, std::ostr
   }
 
   try {
-    std::unique_ptr<tbb::global_control> threads;
-    if (opt.threads > 0)
-      threads = std::make_unique<tbb::global_control>(
-          tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(opt.threads));
     return run(opt, out, err);
   } catch (const InputError& e) {
     err << "vdb_shell: error: " << e.what() << "\n";

@@ -5,6 +5,7 @@
 //   InputError     -> 2  (bad input file, bad option; nothing was written)
 //   ResourceError  -> 3  (out of memory budget, cannot write a file, interrupted)
 //   InternalError  -> 3  (an invariant of the output was violated: a bug)
+//   CancelledError -> 3  (the caller cancelled the run through RunControl; nothing was written)
 #pragma once
 
 #include <stdexcept>
@@ -32,6 +33,12 @@ class ResourceError : public Error {
 
 /// The program broke one of its own invariants. Exit code 3.
 class InternalError : public Error {
+ public:
+  using Error::Error;
+};
+
+/// The caller asked the run to stop (RunControl::cancel, run_control.h). Exit code 3.
+class CancelledError : public Error {
  public:
   using Error::Error;
 };

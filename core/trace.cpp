@@ -360,7 +360,8 @@ std::vector<std::uint8_t> classify_vertices(const SurfaceMesh& mesh, double plan
 }
 
 TraceResult trace_paths(const SurfaceMesh& mesh, const FieldSampler& fields,
-                        const TraceOptions& options, const PointIndexFactory& make_index) {
+                        const TraceOptions& options, const PointIndexFactory& make_index,
+                        const StageMonitor& monitor) {
   TraceResult r;
   r.parameters = derive_trace_parameters(options, fields.voxel_size(), bounding_box(mesh));
   const std::size_t n = mesh.points.size();
@@ -368,10 +369,13 @@ TraceResult trace_paths(const SurfaceMesh& mesh, const FieldSampler& fields,
 
   auto t0 = std::chrono::steady_clock::now();
   std::vector<OneTrace> traces(n);
+  monitor.begin_part(0.0, 0.8, n);
   for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
     const std::unique_ptr<FieldProbe> probe = fields.probe();
-    for (std::size_t v = begin; v < end; ++v)
+    for (std::size_t v = begin; v < end; ++v) {
       trace_one(*probe, mesh.points[v], r.planar[v] != 0, options, r.parameters, traces[v]);
+      monitor.advance();
+    }
   });
   r.offsets.assign(n + 1, 0);
   for (std::size_t v = 0; v < n; ++v)
@@ -396,6 +400,7 @@ TraceResult trace_paths(const SurfaceMesh& mesh, const FieldSampler& fields,
   std::vector<std::uint32_t> non_planar, planar;
   for (std::uint32_t v = 0; v < n; ++v) (r.planar[v] ? planar : non_planar).push_back(v);
   resolve_merges(r, non_planar, non_planar, make_index);
+  monitor.report(0.9);
   std::vector<std::uint32_t> all(n);
   for (std::uint32_t v = 0; v < n; ++v) all[v] = v;
   resolve_merges(r, planar, all, make_index);

@@ -25,6 +25,7 @@
 
 #include "core/field.h"
 #include "core/point_index.h"
+#include "core/run_control.h"
 #include "core/surface_mesh.h"
 
 namespace vdb_shell {
@@ -87,9 +88,11 @@ struct TraceResult {
   double end_arc(std::size_t v) const { return arc_length[offsets[v] + end[v]]; }
 };
 
-/// Traces every vertex of `mesh` through `fields` and resolves merges.
+/// Traces every vertex of `mesh` through `fields` and resolves merges. Reports the fraction of
+/// traces done to `monitor` (tracing is 80% of the stage, merging the rest) and checks it.
 TraceResult trace_paths(const SurfaceMesh& mesh, const FieldSampler& fields,
                         const TraceOptions& options,
-                        const PointIndexFactory& make_index = make_hash_point_index);
+                        const PointIndexFactory& make_index = make_hash_point_index,
+                        const StageMonitor& monitor = StageMonitor());
 
 }  // namespace vdb_shell

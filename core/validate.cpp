@@ -298,6 +298,7 @@ LoadedSurface make_surface(const PolygonSoup& soup, const std::string& source,
   }
 
   LoadedSurface out;
+  out.source = source;
   out.polygons_read = soup.polygons.size();
   for (const auto& poly : soup.polygons)
     if (poly.size() > 3) ++out.triangulated_polygons;

@@ -41,6 +41,7 @@ struct SurfaceStats {
 struct LoadedSurface {
   SurfaceMesh mesh;
   SurfaceStats stats;
+  std::string source;                     ///< the name messages use (make_surface()'s source)
   std::size_t polygons_read = 0;          ///< faces in the file before triangulation
   std::size_t triangulated_polygons = 0;  ///< polygons with more than three corners
   std::size_t dropped_unused_vertices = 0;

@@ -75,8 +75,8 @@ struct State {
 class ShellSearch {
  public:
   ShellSearch(const SurfaceMesh& surface, const TraceResult& traces, const InnerVertices& start,
-              const ValidityOptions& options)
-      : surface_(surface), traces_(traces), start_(start) {
+              const ValidityOptions& options, const StageMonitor& monitor)
+      : surface_(surface), traces_(traces), start_(start), monitor_(monitor) {
     const std::size_t n = surface.points.size();
     full_.resize(n);
     floor_.assign(n, std::numeric_limits<double>::infinity());
@@ -284,6 +284,7 @@ class ShellSearch {
     };
     std::size_t unwelded = 0;
     for (std::size_t head = 0; head < queue.size(); ++head) {
+      if ((head & 1023) == 1023) monitor_.check();
       const std::uint32_t f = queue[head];
       queued[f] = 0;
       const LocalPrism p = prism(s, f);
@@ -311,6 +312,7 @@ class ShellSearch {
     std::size_t unwelded = 0;
     std::vector<std::uint32_t> step, around, moved;
     for (const auto& [f, g] : pairs) {
+      monitor_.check();
       for (;;) {
         const LocalPrism a = prism(s, f), b = prism(s, g);
         step.clear();
@@ -417,6 +419,7 @@ class ShellSearch {
   const SurfaceMesh& surface_;
   const TraceResult& traces_;
   const InnerVertices& start_;
+  const StageMonitor& monitor_;  ///< checked every 1024 prisms of the serial loops
   std::vector<double> full_, floor_;
   std::vector<Vec3d> fallback_, correction_;
   Lists groups_;                          ///< start weld group -> its vertices
@@ -455,10 +458,11 @@ void collect_offenders(const SurfaceMesh& surface, const ShellInput& in,
 }  // namespace
 
 ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& traces,
-                            const InnerVertices& start, const ValidityOptions& options) {
+                            const InnerVertices& start, const ValidityOptions& options,
+                            const StageMonitor& monitor) {
   const auto t0 = std::chrono::steady_clock::now();
   const std::uint32_t n = static_cast<std::uint32_t>(surface.points.size());
-  ShellSearch search(surface, traces, start, options);
+  ShellSearch search(surface, traces, start, options, monitor);
   ValidShell out;
   Lists members;  ///< slot -> its surface vertices
   AssembleOptions no_quality;
@@ -481,6 +485,7 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
   std::vector<char> lowered(n);
   std::vector<std::uint32_t> seeds(surface.triangles.size());  // prisms to settle
   std::iota(seeds.begin(), seeds.end(), 0u);
+  double first_offenders = 1;
   for (;; ++out.rounds) {
     // Inverted and flat tets are local: settle them prism by prism before a round.
     out.unwelded += search.settle_volumes(s, seeds, options.shrink,
@@ -491,6 +496,11 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
     out.checks = check(out.shell.mesh);
     if (out.checks.valid() || out.rounds >= options.max_rounds) break;
     collect_offenders(surface, out.input, out.checks, bad_tets, bad_slots);
+    // Progress: the share of the first round's offenders gone (the final check is the last 10%).
+    const double offenders = double(bad_tets.size() + bad_slots.size() +
+                                    out.checks.first_overlapping_pairs.size());
+    if (out.rounds == 0) first_offenders = std::max(offenders, 1.0);
+    monitor.report(0.9 * (1.0 - offenders / first_offenders));
     std::fill(lowered.begin(), lowered.end(), 0);
     // Overlapping prisms, pair by pair: each is stepped back until it is apart.
     prism_pairs.clear();
@@ -572,6 +582,7 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
   }
 
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  monitor.report(0.9);
 
   // The incremental checks trusted unchanged tets; the result carries one full check (the
   // confirmation every run gets, valid search or not: out.checks.seconds, not out.seconds).

@@ -40,6 +40,7 @@
 
 #include "core/assemble.h"
 #include "core/inner.h"
+#include "core/run_control.h"
 #include "core/shell_checks.h"
 
 namespace vdb_shell {
@@ -81,8 +82,11 @@ struct ValidShell {
   double seconds = 0;             ///< the search, without the final full check (checks.seconds)
 };
 
-/// Finds the thickest valid inner vertices along the traces, starting from `start`.
+/// Finds the thickest valid inner vertices along the traces, starting from `start`. Reports to
+/// `monitor` the share of the first round's offending elements gone (90% of the stage; the
+/// final full check is the rest) and checks it.
 ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& traces,
-                            const InnerVertices& start, const ValidityOptions& options = {});
+                            const InnerVertices& start, const ValidityOptions& options = {},
+                            const StageMonitor& monitor = StageMonitor());
 
 }  // namespace vdb_shell

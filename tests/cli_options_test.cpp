@@ -172,14 +172,16 @@ TEST_F(CliOptionEffects, ReportShowsEveryFieldTracingAndShellOption) {
 
 // --- options with an effect elsewhere than the report --------------------------------------------
 
-TEST_F(CliOptionEffects, QuietSilencesStderr) {
+TEST_F(CliOptionEffects, QuietPrintsOnlyErrors) {
   EXPECT_NE(baseline_->err.find("vdb_shell: " + dir_->file("base.vtu") + ": "),
             std::string::npos)
       << baseline_->err;
-  const CliRun r = cli({star(), "-o", file("s.vtu"), "-r", "32", "-q"});
+  const std::string report = file("s.json");
+  const CliRun r = cli({star(), "-o", file("s.vtu"), "-r", "32", "-q", "--report", report});
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_EQ(r.err, "");
-  EXPECT_EQ(r.report["shell"]["tets"], base()["shell"]["tets"]);  // the report is still printed
+  EXPECT_EQ(r.out, "");  // nothing but errors: not even the report on stdout
+  EXPECT_EQ(json::parse(test::read_text(report))["shell"]["tets"], base()["shell"]["tets"]);
 }
 
 TEST_F(CliOptionEffects, MshVersionPicksTheGmshFormat) {
@@ -212,7 +214,7 @@ TEST_F(CliOptionEffects, PathsWritesOnePolylinePerVertex) {
 
 TEST_F(CliOptionEffects, GridsCarryFieldsAndTraces) {
   const std::string vdb = file("s.vdb");
-  const CliRun r = cli({star(), "-o", file("s.vtu"), "-r", "32", "-q", "--grids", vdb});
+  const CliRun r = cli({star(), "-o", file("s.vtu"), "-r", "32", "--grids", vdb});
   ASSERT_EQ(r.code, 0) << r.err;
   std::vector<std::string> names;
   for (const VdbGridInfo& g : read_vdb_grid_infos(vdb)) names.push_back(g.name);
@@ -275,8 +277,8 @@ std::string sphere_level_set(const test::TempDir& dir) {
 
 TEST_F(CliOptionEffects, AdaptivityLowersTheFaceCountOfAVdbInput) {
   const std::string vdb = sphere_level_set(local_);
-  const CliRun fine = cli({vdb, "-o", file("a0.vtu"), "-q", "--adaptivity", "0"});
-  const CliRun coarse = cli({vdb, "-o", file("a5.vtu"), "-q", "--adaptivity", "0.5"});
+  const CliRun fine = cli({vdb, "-o", file("a0.vtu"), "--adaptivity", "0"});
+  const CliRun coarse = cli({vdb, "-o", file("a5.vtu"), "--adaptivity", "0.5"});
   ASSERT_EQ(fine.code, 0) << fine.err;
   ASSERT_EQ(coarse.code, 0) << coarse.err;
   EXPECT_LT(2 * coarse.report["input"]["faces"].get<long>(),
@@ -288,7 +290,7 @@ TEST_F(CliOptionEffects, LevelSetReplacesTheBuiltField) {
   // A 24^3 level set of the star: its voxel size rules, not the resolution (default 128).
   const std::string vdb = file("star24.vdb");
   ASSERT_EQ(cli({star(), "-r", "24", "-q", "--grids", vdb}).code, 0);
-  const CliRun r = cli({star(), "-o", file("s.vtu"), "-q", "--level-set", vdb});
+  const CliRun r = cli({star(), "-o", file("s.vtu"), "--level-set", vdb});
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NEAR(r.report["fields"]["voxel_size"].get<double>(),
               base()["fields"]["voxel_size"].get<double>() * 32.0 / 24.0, 1e-9);
@@ -325,8 +327,8 @@ TEST_F(CliOptionEffects, GridSelectsTheNamedGrid) {
   ASSERT_EQ(made.exit_code, 0) << made.err;
   std::map<std::string, double> volume;
   for (const char* name : {"small", "big"}) {
-    const CliRun r = cli({two, "-o", file(std::string(name) + ".vtu"), "-q", "--adaptivity", "0.5",
-                       "--grid", name});
+    const CliRun r = cli({two, "-o", file(std::string(name) + ".vtu"), "--adaptivity", "0.5", "--grid",
+                       name});
     ASSERT_EQ(r.code, 0) << name << ": " << r.err;
     volume[name] = r.report["input"]["enclosed_volume"].get<double>();
   }
@@ -348,6 +350,7 @@ const std::map<std::string, std::string>& shown_elsewhere() {
       {"--format", "CliBatch.AllGoodExit0AndFormatChoosesExtension"},
       {"--progress", "CliProgress.StagesAndTimingsOnStderr"},
       {"--verbose", "CliProgress.StagesAndTimingsOnStderr"},
+      {"--no-progress", "CliProgress.BarOnATerminalUnlessNoProgress"},
       {"--inner", "Pipeline.ThicknessLimitHolds"},
       {"--max-thickness", "Pipeline.ThicknessLimitHolds"},
       {"--thickness-edge-factor", "Pipeline.EdgeFactorThicknessLimitHolds"},
@@ -358,7 +361,7 @@ const std::map<std::string, std::string>& shown_elsewhere() {
 /// Options shown by the tests of this file (besides the report table).
 const std::map<std::string, std::string>& shown_here() {
   static const std::map<std::string, std::string> m = {
-      {"--quiet", "CliOptionEffects.QuietSilencesStderr"},
+      {"--quiet", "CliOptionEffects.QuietPrintsOnlyErrors"},
       {"--msh-version", "CliOptionEffects.MshVersionPicksTheGmshFormat"},
       {"--max-memory", "CliOptionEffects.MaxMemoryRefusesTheFieldBuild"},
       {"--paths", "CliOptionEffects.PathsWritesOnePolylinePerVertex"},

@@ -234,6 +234,31 @@ TEST(CliProgress, StagesAndTimingsOnStderr) {
   EXPECT_EQ(r.err.find("[1/6]"), std::string::npos) << r.err;  // not a terminal: no progress
 }
 
+TEST(CliProgress, BarOnATerminalUnlessNoProgress) {
+  // `script` runs the command on a pseudo-terminal: stderr is a terminal there.
+  if (run_command("command -v script").exit_code != 0) GTEST_SKIP() << "script (util-linux)";
+  TempDir dir;
+  test::write_text(dir.file("tet.obj"), kTetObj);
+  const std::string command = "'" + test::vdb_shell_bin() + "' '" + dir.file("tet.obj") +
+                              "' -o '" + dir.file("t.vtu") + "' -r 64";
+  auto on_terminal = [&](const std::string& args) {
+    return run_command("script -qec \"" + command + " " + args + " >/dev/null\" /dev/null");
+  };
+  const auto bar = on_terminal("");
+  ASSERT_EQ(bar.exit_code, 0) << bar.out << bar.err;
+  // Each stage redrawn in place ("\r", erase line) and closed with its seconds.
+  EXPECT_NE(bar.out.find("\r\033[K[2/6] fields"), std::string::npos) << bar.out;
+  EXPECT_NE(bar.out.find("[5/6] validity ... "), std::string::npos) << bar.out;
+  EXPECT_NE(bar.out.find("[6/6] write ..."), std::string::npos) << bar.out;
+  const auto none = on_terminal("--no-progress");
+  ASSERT_EQ(none.exit_code, 0) << none.out << none.err;
+  EXPECT_EQ(none.out.find("[1/6]"), std::string::npos) << none.out;
+  EXPECT_NE(none.out.find("coverage"), std::string::npos) << none.out;  // the summary line
+  const auto quiet = on_terminal("-q");
+  EXPECT_EQ(quiet.exit_code, 0);
+  EXPECT_EQ(quiet.out, "") << quiet.out;
+}
+
 TEST(CliSignal, SigtermLeavesNoOutputAndNoTempFile) {
   TempDir dir;
   const auto shape = run_command(test::vdb_shell_shapes_bin() + " sphere --detail 8 -o '" +

@@ -1,19 +1,24 @@
-// pipeline_test.cpp — vdb_shell INPUT -o OUTPUT end to end on generated shapes and the shared
-// meshes: report keys, T <= 3F, invariants where they already hold, determinism across thread
-// counts, the independent checker, and bad options leaving nothing behind.
+// pipeline_test.cpp — build_shell() (vdb_shell/vdb_shell.h) end to end, in-process, on generated
+// shapes and the shared meshes: shells checked by test_support's own computations, the report's
+// keys, T <= 3F, thickness limits, determinism across thread counts, the .vdb path, every notice,
+// progress reports, cancellation, bad surfaces and options, and the independent checker.
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
 
+#include <atomic>
+#include <chrono>
+#include <cmath>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
+#include <limits>
+#include <map>
 #include <string>
+#include <vector>
 
 #include "assets/shapes.h"
-#include "core/surface_mesh.h"
 #include "core/writers.h"
 #include "tests/test_support.h"
+#include "vdb_shell/vdb_shell.h"
 
 namespace vdb_shell {
 namespace {
@@ -22,55 +27,66 @@ namespace fs = std::filesystem;
 using test::run_command;
 using test::TempDir;
 
-/// Writes shape `name` to dir and returns its path.
-std::string shape_file(const TempDir& dir, const std::string& name) {
-  const std::string path = dir.file(name + ".obj");
-  const auto r = run_command(test::vdb_shell_shapes_bin() + " " + name + " -o '" + path + "'");
-  EXPECT_EQ(r.exit_code, 0) << r.err;
-  return path;
+ShellOptions at_resolution(int resolution) {
+  ShellOptions o;
+  o.fields.resolution = resolution;
+  return o;
 }
 
-nlohmann::json run_shell(const std::string& input, const std::string& output,
-                         const std::string& extra = "") {
-  const auto r = run_command(test::vdb_shell_bin() + " '" + input + "' -o '" + output + "' " +
-                             extra);
-  EXPECT_EQ(r.exit_code, 0) << r.err;
-  if (r.exit_code != 0) return {};
-  return nlohmann::json::parse(r.out);
+/// build_shell() on a generated shape, with the shell checked independently.
+ShellResult shell_of_shape(const std::string& name, const ShellOptions& options,
+                           int detail = 1) {
+  ShellResult r = build_shell(make_shape(name, detail), options, {}, name);
+  EXPECT_EQ(test::independent_shell_problems(r.surface, r.mesh), "") << name;
+  return r;
 }
+
+nlohmann::json report_of(const ShellResult& r) { return nlohmann::json::parse(report_json(r)); }
 
 TEST(Pipeline, ReportHasEveryDocumentedKey) {
-  TempDir dir;
-  const std::string in = shape_file(dir, "horn");
-  const std::string report = dir.file("horn.json");
-  const nlohmann::json j =
-      run_shell(in, dir.file("horn.vtu"), "--resolution 64 -q --report '" + report + "'");
-  ASSERT_FALSE(j.is_null());
-  EXPECT_EQ(nlohmann::json::parse(test::read_text(report)), j);
+  const ShellResult r = shell_of_shape("horn", at_resolution(64));
+  ReportFiles files;
+  files.shell = "horn.vtu";
+  const nlohmann::json j = nlohmann::json::parse(report_json(r, files, 0.25, 0.5));
   for (const char* key :
-       {"/input/faces", "/input/vertices", "/shell/tets", "/shell/coverage",
-        "/shell/inverted_tets", "/shell/intersecting_tet_pairs", "/quality/min",
-        "/quality/median", "/stop_reasons/critical", "/stop_reasons/merge", "/stop_reasons/flux",
-        "/stop_reasons/cap", "/timings_s/read", "/timings_s/fields", "/timings_s/trace",
-        "/timings_s/assemble", "/timings_s/write", "/timings_s/total"})
+       {"/input/file", "/input/faces", "/input/vertices", "/input/genus", "/fields/voxel_size",
+        "/fields/strategy", "/trace/step", "/trace/integrator", "/shell/file", "/shell/tets",
+        "/shell/coverage", "/shell/inverted_tets", "/shell/intersecting_tet_pairs",
+        "/shell/valid", "/validity/rounds", "/validity/on_surface_vertices", "/quality/min",
+        "/quality/median", "/quality/histogram", "/stop_reasons/critical",
+        "/stop_reasons/merge", "/stop_reasons/flux", "/stop_reasons/cap", "/timings_s/read",
+        "/timings_s/fields", "/timings_s/trace", "/timings_s/assemble", "/timings_s/check",
+        "/timings_s/write", "/timings_s/total"})
     EXPECT_TRUE(j.contains(nlohmann::json::json_pointer(key))) << key;
+  EXPECT_EQ(j["input"]["file"], "horn");
+  EXPECT_EQ(j["shell"]["file"], "horn.vtu");
   EXPECT_EQ(j["input"]["faces"], 408);
-  EXPECT_LE(j["shell"]["tets"].get<int>(), 3 * 408);
+  EXPECT_EQ(j["shell"]["tets"].get<std::size_t>(), r.mesh.tets.size());
+  EXPECT_EQ(j["shell"]["points"].get<std::size_t>(), r.mesh.points.size());
+  EXPECT_LE(r.mesh.tets.size(), 3u * 408u);
   EXPECT_EQ(j["stop_reasons"]["cap"], 0);
-  EXPECT_EQ(j["shell"]["outside_inner_vertices"], 0);
-  EXPECT_EQ(j["shell"]["missing_surface_triangles"], 0);
+  EXPECT_EQ(j["timings_s"]["read"].get<double>(), 0.25);
+  EXPECT_NEAR(j["timings_s"]["total"].get<double>(), r.timings.total + 0.75, 1e-12);
+  // Per-tet and per-point arrays of the result are complete.
+  EXPECT_EQ(r.mesh.source_triangle.size(), r.mesh.tets.size());
+  EXPECT_EQ(r.mesh.quality.size(), r.mesh.tets.size());
+  EXPECT_EQ(r.mesh.inner.size(), r.mesh.points.size());
+  EXPECT_EQ(r.mesh.thickness.size(), r.mesh.points.size());
+  EXPECT_EQ(r.inner_surface.triangles.size(), 408u);
+  EXPECT_EQ(r.traces.num_traces(), r.surface.points.size());
 }
 
 TEST(Pipeline, CoarsePaperShapesAreValidAndFull) {
   // The paper's claim holds where the mesh is coarser than the grid (DESIGN: measured 0.98+).
-  TempDir dir;
   for (const char* name : {"box", "cylinder", "sphere"}) {
-    const std::string in = shape_file(dir, name);
-    const nlohmann::json j = run_shell(in, dir.file(std::string(name) + ".vtu"), "-q");
-    ASSERT_FALSE(j.is_null());
-    EXPECT_TRUE(j["shell"]["valid"].get<bool>()) << name << " " << j["shell"].dump();
-    EXPECT_GE(j["shell"]["coverage"].get<double>(), 0.95) << name;
-    EXPECT_GT(j["quality"]["min"].get<double>(), 0.0) << name;
+    const ShellResult r = shell_of_shape(name, ShellOptions());
+    // Coverage from the tets' own volumes against the enclosed volume.
+    double volume = 0;
+    for (const Tet& t : r.mesh.tets)
+      volume += tet_volume(r.mesh.points[t[0]], r.mesh.points[t[1]], r.mesh.points[t[2]],
+                           r.mesh.points[t[3]]);
+    EXPECT_GE(volume / signed_volume(r.surface), 0.95) << name;
+    EXPECT_NEAR(volume / signed_volume(r.surface), r.quality.coverage, 1e-9) << name;
   }
 }
 
@@ -80,78 +96,53 @@ TEST(Pipeline, IndependentCheckerAcceptsTheBox) {
   if (run_command("/usr/bin/python3 -c 'import meshio, scipy'").exit_code != 0)
     GTEST_SKIP() << "python3-meshio/scipy missing";
   TempDir dir;
-  const std::string in = shape_file(dir, "box");
-  run_shell(in, dir.file("box.vtu"), "-q");
-  const auto r = run_command("/usr/bin/python3 '" + checker.string() + "' '" + in + "' '" +
-                             dir.file("box.vtu") + "' --samples 20000");
-  EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
+  const ShellResult r = shell_of_shape("box", ShellOptions());
+  write_surface(dir.file("box.obj"), r.surface);
+  write_shell(dir.file("box.vtu"), r);
+  const auto c = run_command("/usr/bin/python3 '" + checker.string() + "' '" + dir.file("box.obj") +
+                             "' '" + dir.file("box.vtu") + "' --samples 20000");
+  EXPECT_EQ(c.exit_code, 0) << c.out << c.err;
 }
 
 TEST(Pipeline, SameBytesForOneAndTwoThreads) {
   TempDir dir;
-  const std::string in = shape_file(dir, "star");
-  run_shell(in, dir.file("a.vtu"), "-q -j 1 --resolution 64 --paths '" + dir.file("a.vtk") + "'");
-  run_shell(in, dir.file("b.vtu"), "-q -j 2 --resolution 64 --paths '" + dir.file("b.vtk") + "'");
-  const std::string a = test::read_text(dir.file("a.vtu"));
-  EXPECT_FALSE(a.empty());
-  EXPECT_EQ(a, test::read_text(dir.file("b.vtu")));
-  EXPECT_EQ(test::read_text(dir.file("a.vtk")), test::read_text(dir.file("b.vtk")));
+  std::string shell[2], traces[2];
+  for (int threads : {1, 2}) {
+    ShellOptions o = at_resolution(64);
+    o.threads = threads;
+    const ShellResult r = shell_of_shape("star", o);
+    const std::string stem = dir.file("s" + std::to_string(threads));
+    write_shell(stem + ".vtu", r);
+    write_traces(stem + ".vtk", r);
+    shell[threads - 1] = test::read_text(stem + ".vtu");
+    traces[threads - 1] = test::read_text(stem + ".vtk");
+  }
+  EXPECT_FALSE(shell[0].empty());
+  EXPECT_TRUE(shell[0] == shell[1]);
+  EXPECT_TRUE(traces[0] == traces[1]);
 }
 
 TEST(Pipeline, ThicknessLimitHolds) {
-  TempDir dir;
-  const std::string in = shape_file(dir, "sphere");
-  const nlohmann::json j =
-      run_shell(in, dir.file("s.vtu"), "-q --resolution 64 --max-thickness 0.1 --inner '" +
-                                           dir.file("inner.obj") + "'");
-  ASSERT_FALSE(j.is_null());
-  EXPECT_GT(j["shell"]["thickness_limited_vertices"].get<int>(), 300);
+  ShellOptions o = at_resolution(64);
+  o.thickness.max_thickness = 0.1;
+  const ShellResult r = shell_of_shape("sphere", o);
+  EXPECT_GT(r.counts.thickness_limited_vertices, 300u);
   // Every inner vertex of a radius-0.5 sphere lies at radius >= 0.4 (thickness along the trace).
-  std::ifstream inner(dir.file("inner.obj"));
-  std::string tag;
-  double x, y, z;
-  int vertices = 0;
-  while (inner >> tag) {
-    if (tag == "v" && (inner >> x >> y >> z)) {
-      EXPECT_GE(std::sqrt(x * x + y * y + z * z), 0.4 - 1e-9);
-      ++vertices;
-    } else {
-      std::getline(inner, tag);
-    }
-  }
-  EXPECT_GT(vertices, 300);
-}
-
-/// Vertices and triangles of an OBJ file (v and f lines, 1-based plain indices).
-SurfaceMesh read_obj(const std::string& path) {
-  SurfaceMesh m;
-  std::ifstream in(path);
-  std::string line;
-  while (std::getline(in, line)) {
-    std::istringstream s(line);
-    std::string tag;
-    s >> tag;
-    if (tag == "v") {
-      Vec3d p;
-      s >> p.x >> p.y >> p.z;
-      m.points.push_back(p);
-    } else if (tag == "f") {
-      Triangle t;
-      s >> t[0] >> t[1] >> t[2];
-      m.triangles.push_back({t[0] - 1, t[1] - 1, t[2] - 1});
-    }
-  }
-  return m;
+  const std::size_t n = r.surface.points.size();
+  ASSERT_GT(r.mesh.points.size(), n + 300);
+  for (std::size_t i = n; i < r.mesh.points.size(); ++i)
+    EXPECT_GE(norm(r.mesh.points[i]), 0.4 - 1e-9) << i;
+  for (const Vec3d& p : r.inner_surface.points) EXPECT_GE(norm(p), 0.4 - 1e-9);
 }
 
 TEST(Pipeline, EdgeFactorThicknessLimitHolds) {
   // Paper Fig. 12: thickness at most K times the mean length of the vertex's incident edges.
-  TempDir dir;
-  const std::string in = shape_file(dir, "horn");
   const double k = 0.5;
-  run_shell(in, dir.file("h.vtu"),
-            "-q --thickness-edge-factor 0.5 --inner '" + dir.file("inner.obj") + "'");
-  const SurfaceMesh outer = read_obj(in), inner = read_obj(dir.file("inner.obj"));
+  ShellOptions o;
+  o.thickness.edge_factor = k;
+  const ShellResult r = shell_of_shape("horn", o);
+  const SurfaceMesh& outer = r.surface;
+  const SurfaceMesh& inner = r.inner_surface;
   ASSERT_EQ(outer.triangles.size(), inner.triangles.size());
   std::vector<double> sum(outer.points.size(), 0.0);
   std::vector<int> count(outer.points.size(), 0);
@@ -163,13 +154,13 @@ TEST(Pipeline, EdgeFactorThicknessLimitHolds) {
     }
   int checked = 0;
   for (std::size_t f = 0; f < outer.triangles.size(); ++f) {
-    const Triangle& o = outer.triangles[f];
-    const Triangle& i = inner.triangles[f];  // the inner copy is written reversed: (a, c, b)
+    const Triangle& a = outer.triangles[f];
+    const Triangle& i = inner.triangles[f];  // the inner copy runs reversed: (a, c, b)
     const std::uint32_t corner_to_inner[3] = {i[0], i[2], i[1]};
     for (int c = 0; c < 3; ++c) {
-      const double limit = k * sum[o[c]] / count[o[c]];
+      const double limit = k * sum[a[c]] / count[a[c]];
       // The straight distance never exceeds the arc length the limit applies to.
-      EXPECT_LE(distance(outer.points[o[c]], inner.points[corner_to_inner[c]]), limit + 1e-9);
+      EXPECT_LE(distance(outer.points[a[c]], inner.points[corner_to_inner[c]]), limit + 1e-9);
       ++checked;
     }
   }
@@ -180,65 +171,220 @@ TEST(Pipeline, VdbInputRoundTrip) {
   // Write the sphere's level set, shell the .vdb itself (meshed at its zero crossing), and
   // compare with shelling the mesh directly.
   TempDir dir;
-  const std::string in = shape_file(dir, "sphere");
-  const auto g = run_command(test::vdb_shell_bin() + " '" + in + "' -q --resolution 64 --grids '" +
-                             dir.file("s.vdb") + "'");
-  ASSERT_EQ(g.exit_code, 0) << g.err;
-  const nlohmann::json direct = run_shell(in, dir.file("direct.vtu"), "-q --resolution 64");
-  const nlohmann::json from_vdb =
-      run_shell(dir.file("s.vdb"), dir.file("vdb.vtu"), "-q --adaptivity 0.5");
-  ASSERT_FALSE(direct.is_null());
-  ASSERT_FALSE(from_vdb.is_null());
-  EXPECT_TRUE(from_vdb["shell"]["valid"].get<bool>());
-  EXPECT_EQ(from_vdb["input"]["components"], 1);
-  EXPECT_EQ(from_vdb["input"]["genus"], 0);
+  ShellOptions o = at_resolution(64);
+  o.keep_fields = true;
+  const ShellResult direct = shell_of_shape("sphere", o);
+  ASSERT_TRUE(direct.fields);
+  write_fields(dir.file("s.vdb"), direct);
+  ShellOptions from_file;
+  from_file.adaptivity = 0.5;
+  const ShellResult from_vdb = build_shell_from_level_set(dir.file("s.vdb"), from_file);
+  EXPECT_EQ(test::independent_shell_problems(from_vdb.surface, from_vdb.mesh), "");
+  EXPECT_EQ(from_vdb.input.source, dir.file("s.vdb"));
+  EXPECT_EQ(from_vdb.input.stats.components, 1u);
+  EXPECT_EQ(from_vdb.input.stats.genus, 0);
   // Enclosed volume within 5% (adaptive polygons of a 64^3 zero crossing cut corners: -3.6%
   // measured), same voxel size.
-  EXPECT_NEAR(from_vdb["input"]["enclosed_volume"].get<double>(),
-              direct["input"]["enclosed_volume"].get<double>(),
-              0.05 * direct["input"]["enclosed_volume"].get<double>());
-  EXPECT_NEAR(from_vdb["fields"]["voxel_size"].get<double>(),
-              direct["fields"]["voxel_size"].get<double>(), 1e-9);
-  EXPECT_GE(from_vdb["shell"]["coverage"].get<double>(), 0.95);
-  EXPECT_GE(direct["shell"]["coverage"].get<double>(), 0.95);
-  // --adaptivity only applies to .vdb inputs; a .vdb INPUT is its own level set.
-  EXPECT_EQ(run_command(test::vdb_shell_bin() + " '" + in + "' --adaptivity 0.5").exit_code, 2);
-  EXPECT_EQ(run_command(test::vdb_shell_bin() + " '" + dir.file("s.vdb") + "' --level-set '" +
-                        dir.file("s.vdb") + "'").exit_code,
-            2);
+  EXPECT_NEAR(from_vdb.input.stats.enclosed_volume, direct.input.stats.enclosed_volume,
+              0.05 * direct.input.stats.enclosed_volume);
+  EXPECT_NEAR(from_vdb.field_stats.voxel_size, direct.field_stats.voxel_size, 1e-9);
+  EXPECT_GE(from_vdb.quality.coverage, 0.95);
+  // A .vdb input is its own level set.
+  ShellOptions both = from_file;
+  both.level_set = dir.file("s.vdb");
+  EXPECT_THROW(build_shell_from_level_set(dir.file("s.vdb"), both), InputError);
+}
+
+TEST(Pipeline, FieldNoticesReachTheResult) {
+  // A narrow-band level set gets its interior filled by fast sweeping, which says so.
+  if (run_command("command -v vdb_tool").exit_code != 0)
+    GTEST_SKIP() << "vdb_tool (libopenvdb-tools) not installed";
+  TempDir dir;
+  const std::string vdb = dir.file("band.vdb");
+  const auto made = run_command("vdb_tool -sphere voxel=0.02 radius=0.5 width=3 name=surface "
+                                "-write '" + vdb + "'");
+  ASSERT_EQ(made.exit_code, 0) << made.err;
+  const ShellResult r = build_shell_from_level_set(vdb, ShellOptions());
+  // The meshing's notice (its quads split into triangles) first, then the fields'.
+  ASSERT_EQ(r.notices.size(), 2u);
+  EXPECT_NE(r.notices[0].find("split into triangles"), std::string::npos) << r.notices[0];
+  EXPECT_NE(r.notices[1].find("fast sweeping"), std::string::npos) << r.notices[1];
+  EXPECT_EQ(r.field_stats.notices, std::vector<std::string>{r.notices[1]});
+  EXPECT_EQ(test::independent_shell_problems(r.surface, r.mesh), "");
+  // The CLI prints it.
+  const auto cli = run_command(test::vdb_shell_bin() + " '" + vdb + "' -o '" +
+                               dir.file("s.vtu") + "'");
+  ASSERT_EQ(cli.exit_code, 0) << cli.err;
+  EXPECT_NE(cli.err.find("vdb_shell: note: the level set"), std::string::npos) << cli.err;
+}
+
+TEST(Pipeline, ValidationNoticesComeFirst) {
+  SurfaceMesh inward = make_shape("box", 1);
+  for (Triangle& t : inward.triangles) std::swap(t[1], t[2]);
+  inward.points.push_back({5, 5, 5});  // used by no face: dropped
+  const ShellResult r = build_shell(inward, at_resolution(32));
+  ASSERT_EQ(r.notices.size(), 2u);
+  EXPECT_NE(r.notices[0].find("flipped"), std::string::npos) << r.notices[0];
+  EXPECT_NE(r.notices[1].find("dropped"), std::string::npos) << r.notices[1];
+  EXPECT_TRUE(r.input.flipped);
+  EXPECT_EQ(r.surface.points.size(), inward.points.size() - 1);
+  EXPECT_EQ(test::independent_shell_problems(r.surface, r.mesh), "");
+}
+
+TEST(Pipeline, TracesOnlyStopsBeforeTheShell) {
+  ShellOptions o = at_resolution(32);
+  o.traces_only = true;
+  const ShellResult r = build_shell(make_shape("torus", 1), o);
+  EXPECT_TRUE(r.mesh.tets.empty());
+  EXPECT_EQ(r.traces.num_traces(), make_shape("torus", 1).points.size());
+  EXPECT_FALSE(r.fields);
+  TempDir dir;
+  EXPECT_THROW(write_shell(dir.file("s.vtu"), r), InputError);
+  EXPECT_THROW(write_fields(dir.file("s.vdb"), r), InputError);  // no keep_fields
+  EXPECT_FALSE(fs::exists(dir.file("s.vtu")));
+  const nlohmann::json j = report_of(r);
+  EXPECT_FALSE(j.contains("shell"));
+  EXPECT_TRUE(j.contains("stop_reasons"));
+}
+
+TEST(Pipeline, ProgressReportsEveryStageFromZeroToOne) {
+  std::vector<std::pair<std::string, double>> reports;
+  RunControl control;
+  control.progress = [&](const std::string& stage, double fraction) {
+    reports.emplace_back(stage, fraction);
+  };
+  build_shell(make_shape("sphere", 2), at_resolution(96), control);
+  std::vector<std::string> order;
+  std::map<std::string, double> last;
+  for (const auto& [stage, fraction] : reports) {
+    if (order.empty() || order.back() != stage) {
+      order.push_back(stage);
+      EXPECT_EQ(fraction, 0.0) << stage << " starts at 0";
+    } else {
+      EXPECT_GE(fraction, last[stage]) << stage << " goes back";
+    }
+    EXPECT_GE(fraction, 0.0);
+    EXPECT_LE(fraction, 1.0);
+    last[stage] = fraction;
+  }
+  EXPECT_EQ(order, (std::vector<std::string>{"fields", "trace", "inner", "validity"}));
+  for (const std::string& stage : order) EXPECT_EQ(last[stage], 1.0) << stage;
+}
+
+TEST(Pipeline, CancelFlagStopsEveryStageQuickly) {
+  // Cancel once a stage has reported some progress; the call throws CancelledError within
+  // ~0.1 s of work (allow 1 s on a loaded machine) and the result is never seen.
+  const SurfaceMesh sphere = make_shape("sphere", 3);
+  for (const char* stage : {"fields", "trace", "validity"}) {
+    std::atomic<bool> cancel{false};
+    std::chrono::steady_clock::time_point cancelled_at;
+    RunControl control;
+    control.cancel = &cancel;
+    control.progress = [&](const std::string& s, double fraction) {
+      if (s == stage && fraction > 0 && !cancel) {
+        cancelled_at = std::chrono::steady_clock::now();
+        cancel = true;
+      }
+    };
+    try {
+      build_shell(sphere, at_resolution(160), control);
+      ADD_FAILURE() << stage << ": not cancelled";
+    } catch (const CancelledError& e) {
+      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() -
+                                                           cancelled_at).count();
+      EXPECT_TRUE(cancel) << stage;
+      EXPECT_LT(seconds, 1.0) << stage;
+      EXPECT_NE(std::string(e.what()).find(stage), std::string::npos) << e.what();
+    }
+  }
+  // A flag set before the call: nothing runs.
+  std::atomic<bool> cancel{true};
+  RunControl control;
+  control.cancel = &cancel;
+  EXPECT_THROW(build_shell(sphere, at_resolution(32), control), CancelledError);
+}
+
+TEST(Pipeline, BadSurfacesAndOptionsAreInputErrors) {
+  auto message_of = [](const SurfaceMesh& mesh, const ShellOptions& o) -> std::string {
+    try {
+      build_shell(mesh, o, {}, "arrays");
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "no InputError";
+  };
+  const SurfaceMesh box = make_shape("box", 1);
+  SurfaceMesh nan = box;
+  nan.points[3].y = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_NE(message_of(nan, {}).find("arrays: "), std::string::npos) << message_of(nan, {});
+  EXPECT_NE(message_of(nan, {}).find("vertex 3"), std::string::npos) << message_of(nan, {});
+  SurfaceMesh out_of_range = box;
+  out_of_range.triangles[5][1] = 1000;
+  EXPECT_NE(message_of(out_of_range, {}).find("1000"), std::string::npos)
+      << message_of(out_of_range, {});
+  SurfaceMesh open = box;
+  open.triangles.pop_back();
+  EXPECT_NE(message_of(open, {}).find("boundary edges"), std::string::npos);
+  ShellOptions low = at_resolution(4);
+  EXPECT_NE(message_of(box, low).find("--resolution 4"), std::string::npos)
+      << message_of(box, low);
+  ShellOptions quality;
+  quality.validity.min_quality = 0.7;
+  EXPECT_NE(message_of(box, quality).find("--min-quality"), std::string::npos);
+  ShellOptions thickness;
+  thickness.thickness.max_thickness = -1;
+  EXPECT_NE(message_of(box, thickness).find("--max-thickness"), std::string::npos);
+  ShellOptions rho;
+  rho.trace.flux_threshold = 3;
+  EXPECT_NE(message_of(box, rho), "no InputError");
 }
 
 TEST(Pipeline, FoldedVerticesStayOnTheSurface) {
   // fandisk's level set meshed adaptively (10,188 faces at 0.3, closed, no self-intersection) has
   // one vertex whose incident faces admit no common inward direction: it stays on the surface and
   // the shell is valid. At 0.6 the adaptive mesh intersects itself next to its folds (as
-  // `tetgen -d` confirms): a clear exit 2 naming two crossing triangles.
+  // `tetgen -d` confirms): an InputError naming two crossing triangles.
   const auto meshes = test::shared_meshes_dir();
   if (meshes.empty()) GTEST_SKIP() << "../shared/meshes is absent";
   TempDir dir;
-  const auto g = run_command(test::vdb_shell_bin() + " '" + (meshes / "fandisk.obj").string() +
-                             "' -q --resolution 128 --grids '" + dir.file("f.vdb") + "'");
-  ASSERT_EQ(g.exit_code, 0) << g.err;
-  const auto ok = run_command(test::vdb_shell_bin() + " '" + dir.file("f.vdb") + "' -o '" +
-                              dir.file("f.vtu") + "' -q --adaptivity 0.3 --report '" +
-                              dir.file("f.json") + "'");
-  ASSERT_EQ(ok.exit_code, 0) << ok.err;
-  const auto report = nlohmann::json::parse(test::read_text(dir.file("f.json")));
-  EXPECT_TRUE(report["shell"]["valid"].get<bool>());
-  EXPECT_EQ(report["validity"]["on_surface_vertices"].get<int>(), 1);
-  EXPECT_GT(report["shell"]["coverage"].get<double>(), 0.7);
+  ShellOptions o;
+  o.traces_only = true;
+  o.keep_fields = true;
+  write_fields(dir.file("f.vdb"), build_shell(load_surface((meshes / "fandisk.obj").string()), o));
+  ShellOptions adaptive;
+  adaptive.adaptivity = 0.3;
+  const ShellResult r = build_shell_from_level_set(dir.file("f.vdb"), adaptive);
+  EXPECT_EQ(test::independent_shell_problems(r.surface, r.mesh), "");
+  EXPECT_EQ(r.validity.on_surface_vertices, 1u);
+  EXPECT_GT(r.quality.coverage, 0.7);
 
-  const auto r = run_command(test::vdb_shell_bin() + " '" + dir.file("f.vdb") + "' -o '" +
-                             dir.file("g.vtu") + "' -q --adaptivity 0.6");
-  EXPECT_EQ(r.exit_code, 2) << r.err;
-  EXPECT_NE(r.err.find("intersects itself (triangles "), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("--adaptivity"), std::string::npos) << r.err;
-  EXPECT_FALSE(std::filesystem::exists(dir.file("g.vtu")));
+  adaptive.adaptivity = 0.6;
+  try {
+    build_shell_from_level_set(dir.file("f.vdb"), adaptive);
+    ADD_FAILURE() << "no InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("intersects itself (triangles "), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("--adaptivity"), std::string::npos) << e.what();
+  }
 }
 
-TEST(Pipeline, BadOptionsExit2AndWriteNothing) {
+TEST(Pipeline, SharedMeshesRunEndToEnd) {
+  const fs::path meshes = test::shared_meshes_dir();
+  if (meshes.empty()) GTEST_SKIP() << "../shared/meshes is absent";
+  for (const char* name : {"decimated-knight.off", "spot.obj", "fandisk.obj", "fertility.off"}) {
+    const LoadedSurface s = load_surface((meshes / name).string());
+    const ShellResult r = build_shell(s, at_resolution(64));
+    EXPECT_EQ(test::independent_shell_problems(s.mesh, r.mesh), "") << name;
+    EXPECT_EQ(r.traces.count[static_cast<int>(StopReason::kCap)], 0u) << name;
+    EXPECT_GT(r.quality.coverage, 0.5) << name;
+  }
+}
+
+TEST(PipelineCli, BadOptionsExit2AndWriteNothing) {
   TempDir dir;
-  const std::string in = shape_file(dir, "box");
+  const std::string in = dir.file("box.obj");
+  write_surface(in, make_shape("box", 1));
   auto expect_rejected = [&](const std::string& args, const std::string& output) {
     const auto r = run_command(test::vdb_shell_bin() + " '" + in + "' " + args);
     EXPECT_EQ(r.exit_code, 2) << args << ": " << r.err;
@@ -252,22 +398,38 @@ TEST(Pipeline, BadOptionsExit2AndWriteNothing) {
   expect_rejected("-o '" + dir.file("s.vtu") + "' --flux-threshold 3", dir.file("s.vtu"));
   expect_rejected("-o '" + dir.file("nofolder/s.vtu") + "'", dir.file("nofolder/s.vtu"));
   expect_rejected("-o '" + dir.file("s.vtu") + "' --quiet --verbose", dir.file("s.vtu"));
+  expect_rejected("-o '" + dir.file("s.vtu") + "' --progress --no-progress", dir.file("s.vtu"));
 }
 
-TEST(Pipeline, SharedMeshesRunEndToEnd) {
-  const fs::path meshes = test::shared_meshes_dir();
-  if (meshes.empty()) GTEST_SKIP() << "../shared/meshes is absent";
+TEST(PipelineCli, QuietPrintsNothingAndReportMatchesTheLibrary) {
   TempDir dir;
-  for (const char* name : {"decimated-knight.off", "spot.obj", "fandisk.obj", "fertility.off"}) {
-    const nlohmann::json j =
-        run_shell((meshes / name).string(), dir.file("s.vtu"), "-q --resolution 64");
-    ASSERT_FALSE(j.is_null()) << name;
-    EXPECT_LE(j["shell"]["tets"].get<long>(), 3 * j["input"]["faces"].get<long>()) << name;
-    EXPECT_EQ(j["stop_reasons"]["cap"], 0) << name;
-    EXPECT_EQ(j["shell"]["missing_surface_triangles"], 0) << name;
-    EXPECT_GT(j["shell"]["coverage"].get<double>(), 0.5) << name;
-    EXPECT_TRUE(j["shell"]["valid"].get<bool>()) << name;
+  const std::string in = dir.file("horn.obj");
+  write_surface(in, make_shape("horn", 1));
+  const auto q = run_command(test::vdb_shell_bin() + " '" + in + "' -q -r 48 -o '" +
+                             dir.file("q.vtu") + "' --report '" + dir.file("q.json") + "'");
+  EXPECT_EQ(q.exit_code, 0) << q.err;
+  EXPECT_EQ(q.out, "");
+  EXPECT_EQ(q.err, "");
+  const auto loud = run_command(test::vdb_shell_bin() + " '" + in + "' -r 48 -o '" +
+                                dir.file("l.vtu") + "' --progress");
+  ASSERT_EQ(loud.exit_code, 0) << loud.err;
+  // One line per stage on a non-terminal with --progress.
+  for (const char* stage : {"[1/6] read ...", "[2/6] fields ...", "[3/6] trace ...",
+                            "[4/6] inner ...", "[5/6] validity ...", "[6/6] write ..."})
+    EXPECT_NE(loud.err.find(stage), std::string::npos) << stage << "\n" << loud.err;
+  // The JSON on stdout is the --report file's, up to file names and timings.
+  const nlohmann::json cli = nlohmann::json::parse(loud.out);
+  const nlohmann::json quiet = nlohmann::json::parse(test::read_text(dir.file("q.json")));
+  for (const char* part : {"fields", "trace", "stop_reasons", "validity", "quality"}) {
+    nlohmann::json a = cli[part], b = quiet[part];
+    a.erase("seconds");
+    b.erase("seconds");
+    EXPECT_EQ(a, b) << part;
   }
+  EXPECT_EQ(cli["shell"]["tets"], quiet["shell"]["tets"]);
+  // The CLI's shell is the library's, byte for byte.
+  write_shell(dir.file("lib.vtu"), build_shell(load_surface(in), at_resolution(48)));
+  EXPECT_EQ(test::read_text(dir.file("lib.vtu")), test::read_text(dir.file("q.vtu")));
 }
 
 }  // namespace

@@ -5,6 +5,9 @@
 #include <filesystem>
 #include <string>
 
+#include "core/surface_mesh.h"
+#include "core/tet_mesh.h"
+
 namespace vdb_shell::test {
 
 /// A fresh, empty folder under the system temp dir, removed when the object dies.
@@ -44,5 +47,11 @@ std::string read_text(const std::string& path);
 
 /// Writes `text` to `path` (binary, exact bytes).
 void write_text(const std::string& path, const std::string& text);
+
+/// Checks a shell against its surface with computations of its own (none of core/'s checks):
+/// the surface's points come first, unchanged; T <= 3F; every tet's signed volume is positive;
+/// every surface triangle is the outward face of exactly one tet; every other point lies inside
+/// the surface (winding number > 1/2) or on it. Returns "" or the first problem found.
+std::string independent_shell_problems(const SurfaceMesh& surface, const TetMesh& shell);
 
 }  // namespace vdb_shell::test

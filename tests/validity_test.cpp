@@ -1,7 +1,7 @@
 // validity_test.cpp — the validity guarantee of the shell (issue 6): every generated shape at
 // two resolutions, adversarial shapes (thin plate, sharp concave notch, long needle, two close
 // components), identical output for 1 and 2 threads, the coverage targets at 128^3, and the
-// independent checker's verdict.
+// independent checker's verdict; every shell also checked by test_support's own computations.
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
@@ -16,6 +16,7 @@
 #include "assets/shapes.h"
 #include "core/writers.h"
 #include "tests/test_support.h"
+#include "vdb_shell/vdb_shell.h"
 
 namespace vdb_shell {
 namespace {
@@ -61,24 +62,43 @@ SurfaceMesh extrude(const std::vector<Vec3d>& poly, const Vec3d& centre, double 
 }
 
 struct ShellRun {
-  int exit_code = -1;
+  int exit_code = -1;  ///< as the CLI's: 0, 2 for an InputError, 3 for any other error
   std::string err;
   nlohmann::json report;
+  std::string problems;  ///< test::independent_shell_problems() of the shell
+  ShellResult result;
 };
 
-ShellRun shell_of(const TempDir& dir, const SurfaceMesh& mesh, const std::string& name,
-                  const std::string& args) {
-  const std::string in = dir.file(name + ".obj");
-  write_surface(in, mesh);
-  const auto r = run_command(test::vdb_shell_bin() + " '" + in + "' -o '" +
-                             dir.file(name + ".vtu") + "' -q " + args);
-  ShellRun out{r.exit_code, r.err, {}};
-  if (r.exit_code == 0) out.report = nlohmann::json::parse(r.out);
+ShellRun shell_of(const SurfaceMesh& mesh, const std::string& name, int resolution,
+                  int threads = 0) {
+  ShellOptions options;
+  options.fields.resolution = resolution;
+  options.threads = threads;
+  ShellRun out;
+  try {
+    out.result = build_shell(mesh, options, {}, name);
+  } catch (const InputError& e) {
+    out.exit_code = 2;
+    out.err = e.what();
+    return out;
+  } catch (const std::exception& e) {
+    out.exit_code = 3;
+    out.err = e.what();
+    return out;
+  }
+  out.exit_code = 0;
+  out.report = nlohmann::json::parse(report_json(out.result));
+  out.problems = test::independent_shell_problems(out.result.surface, out.result.mesh);
   return out;
+}
+
+ShellRun shell_of_file(const std::string& path, int resolution, int threads = 0) {
+  return shell_of(load_surface(path).mesh, path, resolution, threads);
 }
 
 void expect_valid(const ShellRun& r, const std::string& what) {
   ASSERT_EQ(r.exit_code, 0) << what << ": " << r.err;
+  EXPECT_EQ(r.problems, "") << what;
   const auto& s = r.report["shell"];
   EXPECT_TRUE(s["valid"].get<bool>()) << what << " " << s.dump();
   EXPECT_EQ(s["inverted_tets"], 0) << what;
@@ -91,19 +111,16 @@ void expect_valid(const ShellRun& r, const std::string& what) {
 }
 
 TEST(Validity, EveryShapeAtTwoResolutions) {
-  TempDir dir;
   for (const ShapeInfo& shape : shape_catalog())
     for (int res : {48, 96})
-      expect_valid(shell_of(dir, make_shape(shape.name, 1), shape.name,
-                            "--resolution " + std::to_string(res)),
+      expect_valid(shell_of(make_shape(shape.name, 1), shape.name, res),
                    shape.name + " at " + std::to_string(res));
 }
 
 TEST(Validity, ThinPlate) {
   // 2 voxels thick: the two sides meet at the medial surface.
-  TempDir dir;
   const SurfaceMesh plate = transformed(make_shape("box", 4), {1.0, 1.0, 0.03});
-  const ShellRun r = shell_of(dir, plate, "plate", "--resolution 64");
+  const ShellRun r = shell_of(plate, "plate", 64);
   expect_valid(r, "thin plate");
   EXPECT_GT(r.report["shell"]["coverage"].get<double>(), 0.5);
 }
@@ -111,31 +128,27 @@ TEST(Validity, ThinPlate) {
 TEST(Validity, SharpConcaveNotch) {
   const std::vector<Vec3d> poly = {{0, 0, 0},      {1, 0, 0},   {1, 1, 0}, {0.55, 1, 0},
                                    {0.5, 0.3, 0},  {0.45, 1, 0}, {0, 1, 0}};
-  TempDir dir;
-  expect_valid(shell_of(dir, extrude(poly, {0.5, 0.15, 0}, 0.4, 4), "notch", "--resolution 64"),
+  expect_valid(shell_of(extrude(poly, {0.5, 0.15, 0}, 0.4, 4), "notch", 64),
                "notch");
 }
 
 TEST(Validity, LongNeedle) {
-  TempDir dir;
   const SurfaceMesh needle = transformed(make_shape("cylinder", 2), {0.04, 0.04, 1.0});
-  expect_valid(shell_of(dir, needle, "needle", "--resolution 96"), "needle");
+  expect_valid(shell_of(needle, "needle", 96), "needle");
 }
 
 TEST(Validity, TwoCloseComponents) {
   // Two boxes one voxel apart (resolution 64 over a 1.016-long box: voxel ~0.016).
-  TempDir dir;
   const SurfaceMesh a = transformed(make_shape("box", 2), {0.5, 0.5, 0.5}, {-0.254, 0, 0});
   const SurfaceMesh b = transformed(make_shape("box", 2), {0.5, 0.5, 0.5}, {0.254, 0, 0});
-  const ShellRun r = shell_of(dir, merged(a, b), "pair", "--resolution 64");
+  const ShellRun r = shell_of(merged(a, b), "pair", 64);
   expect_valid(r, "two close boxes");
   EXPECT_EQ(r.report["input"]["components"], 2);
 }
 
 TEST(Validity, FineMeshStaysThick) {
   // Edges (1/24) shorter than the point size (sqrt(3)/32): neighbours start side by side.
-  TempDir dir;
-  const ShellRun r = shell_of(dir, make_shape("box", 12), "finebox", "--resolution 32");
+  const ShellRun r = shell_of(make_shape("box", 12), "finebox", 32);
   expect_valid(r, "fine box");
   EXPECT_GT(r.report["shell"]["coverage"].get<double>(), 0.8);
 }
@@ -145,14 +158,12 @@ TEST(Validity, SharedMeshesValidAndSameForOneAndTwoThreads) {
   if (meshes.empty()) GTEST_SKIP() << "../shared/meshes is absent";
   TempDir dir;
   for (const char* name : {"decimated-knight.off", "spot.obj", "fandisk.obj", "fertility.off"}) {
-    const std::string in = (meshes / name).string();
     std::string bytes[2];
     for (int threads : {1, 2}) {
+      const ShellRun r = shell_of_file((meshes / name).string(), 64, threads);
+      expect_valid(r, name);
       const std::string out = dir.file("s" + std::to_string(threads) + ".vtu");
-      const auto r = run_command(test::vdb_shell_bin() + " '" + in + "' -o '" + out +
-                                 "' -q --resolution 64 -j " + std::to_string(threads));
-      ASSERT_EQ(r.exit_code, 0) << name << ": " << r.err;
-      expect_valid({r.exit_code, r.err, nlohmann::json::parse(r.out)}, name);
+      write_shell(out, r.result);
       bytes[threads - 1] = test::read_text(out);
     }
     EXPECT_FALSE(bytes[0].empty());
@@ -163,9 +174,8 @@ TEST(Validity, SharedMeshesValidAndSameForOneAndTwoThreads) {
 TEST(Validity, CoverageTargetsAt128) {
   // Issue 6's targets at the paper's resolution: >= 0.95 on box, cylinder and sphere; median
   // >= 0.85 over the shared meshes (when present).
-  TempDir dir;
   for (const char* name : {"box", "cylinder", "sphere"}) {
-    const ShellRun r = shell_of(dir, make_shape(name, 1), name, "--resolution 128");
+    const ShellRun r = shell_of(make_shape(name, 1), name, 128);
     expect_valid(r, name);
     EXPECT_GE(r.report["shell"]["coverage"].get<double>(), 0.95) << name;
   }
@@ -173,12 +183,9 @@ TEST(Validity, CoverageTargetsAt128) {
   if (meshes.empty()) GTEST_SKIP() << "../shared/meshes is absent";
   std::vector<double> coverage;
   for (const char* name : {"decimated-knight.off", "spot.obj", "fandisk.obj", "fertility.off"}) {
-    const auto r = run_command(test::vdb_shell_bin() + " '" + (meshes / name).string() +
-                               "' -o '" + dir.file("m.vtu") + "' -q --resolution 128");
-    ASSERT_EQ(r.exit_code, 0) << name << ": " << r.err;
-    const ShellRun run{r.exit_code, r.err, nlohmann::json::parse(r.out)};
-    expect_valid(run, name);
-    coverage.push_back(run.report["shell"]["coverage"].get<double>());
+    const ShellRun r = shell_of_file((meshes / name).string(), 128);
+    expect_valid(r, name);
+    coverage.push_back(r.report["shell"]["coverage"].get<double>());
   }
   std::sort(coverage.begin(), coverage.end());
   const double median = 0.5 * (coverage[1] + coverage[2]);
@@ -193,8 +200,10 @@ TEST(Validity, IndependentCheckerAgrees) {
     GTEST_SKIP() << "python3-meshio/scipy missing";
   TempDir dir;
   for (const char* name : {"horn", "star", "bowl"}) {
-    const ShellRun r = shell_of(dir, make_shape(name, 1), name, "--resolution 64");
+    const ShellRun r = shell_of(make_shape(name, 1), name, 64);
     ASSERT_EQ(r.exit_code, 0) << r.err;
+    write_surface(dir.file(std::string(name) + ".obj"), r.result.surface);
+    write_shell(dir.file(std::string(name) + ".vtu"), r.result);
     const auto c = run_command("/usr/bin/python3 '" + checker.string() + "' '" +
                                dir.file(std::string(name) + ".obj") + "' '" +
                                dir.file(std::string(name) + ".vtu") + "' --samples 20000");

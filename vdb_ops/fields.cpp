@@ -590,8 +590,10 @@ bool band_voxels_apply(const IndexMesh& m) {
 /// Returns the number of triangles voxelized by the flood fill.
 std::size_t band_voxels(const IndexMesh& m, FloatTree& dist, openvdb::Int32Tree& index) {
   tbb::enumerable_thread_specific<BandVoxels> threads;
+  const StageMonitor* monitor = StageMonitor::active();  // build_fields()'s, checked per range
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m.triangles.size(), 64),
                     [&](const tbb::blocked_range<std::size_t>& range) {
+    if (monitor) monitor->check();
     BandVoxels& out = threads.local();
     for (std::size_t i = range.begin(); i < range.end(); ++i) band_voxelize_triangle(m, i, out);
   });
@@ -1344,11 +1346,19 @@ void refine_by_neighbour_triangles(const LeafTable& table, const std::vector<Lea
   });
 }
 
+/// Upper bound of the interior depth of a level set, voxels: half the smallest side of the
+/// active bounding box, plus a margin.
+int interior_depth_bound(const FloatGrid& grid) {
+  const openvdb::CoordBBox b = grid.evalActiveVoxelBoundingBox();
+  const openvdb::Coord d = b.dim();
+  return std::min({d[0], d[1], d[2]}) / 2 + 2;
+}
+
 /// Fills the interior of `sdf` (a narrow band from meshToVolume with its polygon index grid) with
 /// distances to the closest triangles, as described above. `band_in_voxels` is the band's
 /// interior width, voxels.
 void fill_by_wavefront(FloatGrid& sdf, const openvdb::Int32Grid& index_grid, const IndexMesh& m,
-                       float exterior_voxels) {
+                       float exterior_voxels, const StageMonitor& monitor) {
   const std::vector<TriangleF> tris = float_triangles(m);
   const std::int32_t n_tris = std::int32_t(tris.size());
   const float h = float(sdf.voxelSize()[0]);
@@ -1431,7 +1441,10 @@ void fill_by_wavefront(FloatGrid& sdf, const openvdb::Int32Grid& index_grid, con
   for (std::size_t i = 0; i < n; ++i) next_mark[i].store(0, std::memory_order_relaxed);
   float limit = kSeedBandVoxels + 1.0f;  // voxels; accepted distances grow by one per iteration
   tbb::enumerable_thread_specific<TriangleSlots> slots(TriangleSlots(tris.size()));
+  // Progress: one iteration per voxel of depth, at most interior_depth_bound() of them.
+  const double depth_bound = interior_depth_bound(sdf);
   for (int iteration = 0; !active.empty(); ++iteration, limit += 1.0f) {
+    monitor.report(0.25 + 0.5 * std::min(1.0, iteration / depth_bound));
     const std::vector<LeafBits>& fresh_in = fresh[iteration & 1];
     std::vector<LeafBits>& fresh_out = fresh[(iteration + 1) & 1];
     const std::vector<std::uint32_t>& touched_in = fresh_touched[iteration & 1];
@@ -1439,6 +1452,7 @@ void fill_by_wavefront(FloatGrid& sdf, const openvdb::Int32Grid& index_grid, con
     const float limit2 = limit * limit;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, active.size(), 4),
                       [&](const tbb::blocked_range<std::size_t>& range) {
+      monitor.check();
       std::int32_t block[1000];
       std::uint64_t words[1000];
       std::int32_t distinct[64];
@@ -1652,14 +1666,6 @@ void fill_by_wavefront(FloatGrid& sdf, const openvdb::Int32Grid& index_grid, con
   openvdb::tools::pruneLevelSet(sdf.tree());
 }
 
-/// Upper bound of the interior depth of a level set, voxels: half the smallest side of the
-/// active bounding box, plus a margin.
-int interior_depth_bound(const FloatGrid& grid) {
-  const openvdb::CoordBBox b = grid.evalActiveVoxelBoundingBox();
-  const openvdb::Coord d = b.dim();
-  return std::min({d[0], d[1], d[2]}) / 2 + 2;
-}
-
 /// True if some inactive value is negative (the interior is not filled).
 bool has_unfilled_interior(const FloatGrid& grid) {
   for (auto it = grid.tree().cbeginValueOff(); it; ++it) {
@@ -1766,7 +1772,8 @@ struct DerivedLeaves {
 /// Builds the flux grid (and the gradient grid) of `sdf`.
 void derive_fields(const FloatGrid& sdf, const GradientMap& gmap, double flux_min,
                    bool store_gradient, FloatGrid::Ptr& flux_out, Vec3SGrid::Ptr& gradient_out,
-                   std::size_t& interior_voxels, double& seconds_flux, double& seconds_gradient) {
+                   std::size_t& interior_voxels, double& seconds_flux, double& seconds_gradient,
+                   const StageMonitor& monitor) {
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<const FloatLeaf*> leaves;
   leaves.reserve(sdf.tree().leafCount());
@@ -1781,8 +1788,10 @@ void derive_fields(const FloatGrid& sdf, const GradientMap& gmap, double flux_mi
   const float inv_26h = float(1.0 / (26.0 * h));
   const float fmin = float(flux_min);
 
+  monitor.begin_part(0.75, 1.0, leaves.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size(), 16),
                     [&](const tbb::blocked_range<std::size_t>& range) {
+    monitor.advance(range.size());
     FloatGrid::ConstAccessor acc = sdf.getConstAccessor();
     std::vector<float> phi(kBlock * kBlock * kBlock);
     float flux[512];
@@ -1860,14 +1869,15 @@ void derive_fields(const FloatGrid& sdf, const GradientMap& gmap, double flux_mi
 
 std::unique_ptr<Fields> finish_fields(FloatGrid::Ptr sdf, const FieldOptions& options,
                                       FieldStats stats,
-                                      std::chrono::steady_clock::time_point t0) {
+                                      std::chrono::steady_clock::time_point t0,
+                                      const StageMonitor& monitor) {
   auto impl = std::make_unique<Fields::Impl>();
   impl->gmap = gradient_map(sdf->transform());
   sdf->setName("surface");
   sdf->setGridClass(openvdb::GRID_LEVEL_SET);
   derive_fields(*sdf, impl->gmap, options.flux_min, options.store_gradient, impl->flux,
                 impl->gradient, stats.interior_voxels, stats.seconds_flux,
-                stats.seconds_gradient);
+                stats.seconds_gradient, monitor);
   impl->sdf = std::move(sdf);
   stats.voxel_size = impl->gmap.voxel_size;
   const openvdb::Coord dim = impl->sdf->evalActiveVoxelBoundingBox().dim();
@@ -1895,7 +1905,8 @@ std::unique_ptr<Fields> finish_fields(FloatGrid::Ptr sdf, const FieldOptions& op
 
 }  // namespace
 
-std::unique_ptr<Fields> build_fields(const SurfaceMesh& mesh, const FieldOptions& options) {
+std::unique_ptr<Fields> build_fields(const SurfaceMesh& mesh, const FieldOptions& options,
+                                     const StageMonitor& monitor) {
   init_openvdb();
   const FieldPlan plan = plan_fields(mesh, options);
   const auto t0 = std::chrono::steady_clock::now();
@@ -1915,24 +1926,28 @@ std::unique_ptr<Fields> build_fields(const SurfaceMesh& mesh, const FieldOptions
         // distance to its own closest polygon, as the wavefront's voxels do.
         openvdb::Int32Grid::Ptr index_grid = openvdb::Int32Grid::create(-1);
         sdf = mesh_to_band(im, *xform, kSeedBandVoxels, kSeedBandVoxels, *index_grid);
+        monitor.report(0.25);
         const auto t1 = std::chrono::steady_clock::now();
-        fill_by_wavefront(*sdf, *index_grid, im, float(kExteriorBandVoxels));
+        fill_by_wavefront(*sdf, *index_grid, im, float(kExteriorBandVoxels), monitor);
         stats.seconds_fill = seconds_since(t1);
       } else if (options.sdf_method == SdfMethod::kMeshToVolumeInterior) {
         openvdb::Int32Grid::Ptr index_grid = openvdb::Int32Grid::create(-1);
         sdf = mesh_to_volume(im, *xform, float(kExteriorBandVoxels),
                              std::numeric_limits<float>::max(), index_grid.get());
+        monitor.report(0.5);
         const auto t1 = std::chrono::steady_clock::now();
         refine_with_neighbour_triangles(*sdf, *index_grid, im);
         stats.seconds_refine = seconds_since(t1);
       } else {
         FloatGrid::Ptr band = mesh_to_volume(im, *xform, float(kExteriorBandVoxels),
                                              float(kExteriorBandVoxels));
+        monitor.report(0.25);
         sdf = fill_interior_by_sweeping(*band);
       }
     }
+    monitor.report(0.75);
     stats.seconds_sdf = seconds_since(t0);
-    auto fields = finish_fields(std::move(sdf), options, std::move(stats), t0);
+    auto fields = finish_fields(std::move(sdf), options, std::move(stats), t0, monitor);
     return fields;
   } catch (const std::bad_alloc&) {
     throw ResourceError("out of memory while building the fields at resolution " +
@@ -2376,7 +2391,8 @@ FloatGrid::Ptr read_level_set_grid(const std::string& vdb_path, const std::strin
 std::unique_ptr<Fields> fields_from_level_set(const std::string& vdb_path,
                                               const std::string& grid_name,
                                               const SurfaceMesh& mesh,
-                                              const FieldOptions& options) {
+                                              const FieldOptions& options,
+                                              const StageMonitor& monitor) {
   init_openvdb();
   require_readable(vdb_path);
   if (!(options.flux_min >= 0.0 && options.flux_min <= 1.0)) {
@@ -2461,7 +2477,8 @@ std::unique_ptr<Fields> fields_from_level_set(const std::string& vdb_path,
                                 " voxels at a vertex");
       }
     }
-    return finish_fields(std::move(grid), options, std::move(stats), t0);
+    monitor.report(0.75);
+    return finish_fields(std::move(grid), options, std::move(stats), t0, monitor);
   } catch (const std::bad_alloc&) {
     throw ResourceError("out of memory while preparing the fields of " + where);
   }

@@ -43,6 +43,7 @@
 
 #include "core/field.h"
 #include "core/mesh_io.h"
+#include "core/run_control.h"
 #include "core/surface_mesh.h"
 #include "core/vec3.h"
 
@@ -180,8 +181,12 @@ FieldPlan plan_fields(const SurfaceMesh& mesh, const FieldOptions& options);
 
 /// Builds the filled SDF, the flux grid and (optionally) the gradient grid of a closed,
 /// outward-oriented mesh (as load_surface() returns it).
-/// \throw InputError, ResourceError as plan_fields(); ResourceError on std::bad_alloc.
-std::unique_ptr<Fields> build_fields(const SurfaceMesh& mesh, const FieldOptions& options);
+/// Reports the stage's progress to `monitor` (the seed band, the interior fill by depth, the
+/// flux by leaves) and checks it at every parallel step.
+/// \throw InputError, ResourceError as plan_fields(); ResourceError on std::bad_alloc;
+///        CancelledError from `monitor`.
+std::unique_ptr<Fields> build_fields(const SurfaceMesh& mesh, const FieldOptions& options,
+                                     const StageMonitor& monitor = StageMonitor());
 
 /// Uses the level set `grid_name` of the .vdb file `vdb_path` as the SDF instead of building one
 /// (empty name: the FloatGrid named "surface" if it is a level set, else the first FloatGrid
@@ -194,7 +199,8 @@ std::unique_ptr<Fields> build_fields(const SurfaceMesh& mesh, const FieldOptions
 std::unique_ptr<Fields> fields_from_level_set(const std::string& vdb_path,
                                               const std::string& grid_name,
                                               const SurfaceMesh& mesh,
-                                              const FieldOptions& options);
+                                              const FieldOptions& options,
+                                              const StageMonitor& monitor = StageMonitor());
 
 /// Writes `surface` (GRID_LEVEL_SET), `flux`, if stored `gradient`, and, if `traces` is given,
 /// `traces` (OpenVDB points, one per trace sample up to each end sample, with the `surface`

@@ -1,0 +1,37 @@
+# Installation: `cmake --install build --prefix P` puts the library, its headers, both
+# executables, the Python module and a CMake package under P, so that an outside project can
+#   find_package(vdb_shell REQUIRED)
+#   target_link_libraries(app PRIVATE vdb_shell::vdb_shell)
+# The library links OpenVDB, OpenMesh and TBB privately: the package needs none of them.
+include(CMakePackageConfigHelpers)
+
+set(VDB_SHELL_INSTALL_CMAKEDIR ${CMAKE_INSTALL_LIBDIR}/cmake/vdb_shell)
+# The executables find libvdb_shell.so next to them, wherever the tree is installed.
+set_target_properties(vdb_shell vdb_shell_shapes PROPERTIES
+  INSTALL_RPATH "$ORIGIN/../${CMAKE_INSTALL_LIBDIR}")
+
+install(TARGETS vdb_shell_lib EXPORT vdb_shell_targets
+  LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
+  RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR}
+  INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+install(TARGETS vdb_shell vdb_shell_shapes RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+
+# The public header and the headers of the types it hands out (none includes a dependency's).
+install(FILES include/vdb_shell/vdb_shell.h DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/vdb_shell)
+install(FILES
+  core/assemble.h core/errors.h core/field.h core/inner.h core/mesh_io.h core/point_index.h
+  core/quality.h core/run_control.h core/shell_checks.h core/surface_mesh.h core/tet_mesh.h
+  core/trace.h core/validate.h core/validity.h core/vec3.h
+  DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/vdb_shell/core)
+install(FILES vdb_ops/fields.h DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/vdb_shell/vdb_ops)
+
+install(EXPORT vdb_shell_targets NAMESPACE vdb_shell:: FILE vdb_shell-targets.cmake
+  DESTINATION ${VDB_SHELL_INSTALL_CMAKEDIR})
+configure_package_config_file(${CMAKE_CURRENT_LIST_DIR}/vdb_shell-config.cmake.in
+  ${CMAKE_CURRENT_BINARY_DIR}/vdb_shell-config.cmake
+  INSTALL_DESTINATION ${VDB_SHELL_INSTALL_CMAKEDIR})
+write_basic_package_version_file(${CMAKE_CURRENT_BINARY_DIR}/vdb_shell-config-version.cmake
+  COMPATIBILITY SameMinorVersion)
+install(FILES ${CMAKE_CURRENT_BINARY_DIR}/vdb_shell-config.cmake
+  ${CMAKE_CURRENT_BINARY_DIR}/vdb_shell-config-version.cmake
+  DESTINATION ${VDB_SHELL_INSTALL_CMAKEDIR})

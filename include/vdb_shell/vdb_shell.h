@@ -1,0 +1,191 @@
+// vdb_shell.h — the whole pipeline as one call: a closed triangle surface (or a level set in a
+// .vdb file) in, a volumetric shell of tetrahedra out (docs/library.md).
+//
+//   LoadedSurface s = vdb_shell::load_surface("bunny.obj");   // read + validate
+//   ShellResult r = vdb_shell::build_shell(s, options);       // fields, traces, the valid shell
+//   vdb_shell::write_shell("bunny.vtu", r);                   // any format the CLI writes
+//
+// Stages, in order: fields (the filled signed distance field and the flux, OpenVDB), trace (every
+// surface vertex traced inward), inner (thickness limits and welding), validity (the thickest
+// valid shell along the traces, with one full independent-style check). Each reports progress
+// and checks the cancel flag through RunControl (core/run_control.h).
+//
+// Units and frame: everything in the input's world units and frame. Sign: the SDF is negative
+// inside. Tets are positively oriented (tet_volume > 0); the first points of the shell are the
+// surface's vertices, unchanged, followed by the inner vertices.
+//
+// Errors (core/errors.h): InputError for a surface or options that cannot be used (the message
+// names the source, the first offending element and the fix); ResourceError for memory budgets
+// and files; InternalError if a shell broke an invariant (a bug: please report the input);
+// CancelledError when RunControl::cancel was set. A failed call writes nothing and changes no
+// argument. The call keeps no global state: several may run at once on different threads.
+#pragma once
+
+#include <cstddef>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/errors.h"
+#include "core/inner.h"
+#include "core/quality.h"
+#include "core/run_control.h"
+#include "core/shell_checks.h"
+#include "core/surface_mesh.h"
+#include "core/tet_mesh.h"
+#include "core/trace.h"
+#include "core/validate.h"
+#include "core/validity.h"
+#include "vdb_ops/fields.h"
+
+namespace vdb_shell {
+
+/// Every option of a run; each field's default is the CLI's (docs/usage.md has units and the
+/// paper's symbols).
+struct ShellOptions {
+  FieldOptions fields;          ///< --resolution, --voxel-size, --max-memory
+  TraceOptions trace;           ///< --planar-angle, --step, --critical, --point-size, ...
+  ThicknessOptions thickness;   ///< --max-thickness, --thickness-edge-factor
+  ValidityOptions validity;     ///< --min-quality
+  /// A .vdb file whose level set is the distance field, instead of building one (--level-set).
+  std::string level_set;
+  /// Grid of `level_set` (or of build_shell_from_level_set()'s file) to use (--grid); empty:
+  /// "surface" if it is a level set, else the first float level set.
+  std::string grid_name;
+  /// build_shell_from_level_set(): 0 keeps voxel-sized quads, up to 1 merges flat regions into
+  /// fewer faces (--adaptivity).
+  double adaptivity = 0.0;
+  /// Stop after the traces: the result has the fields' figures and the traces, no shell (what
+  /// `--grids` without `-o` needs).
+  bool traces_only = false;
+  /// Keep the fields in ShellResult::fields (for write_fields(); they hold most of the memory).
+  bool keep_fields = false;
+  /// Worker threads of this call (-j; its own TBB arena, other calls are unaffected); 0: all
+  /// cores. The result does not depend on it.
+  int threads = 0;
+};
+
+/// \throw InputError naming the option (by its CLI name) for values outside their ranges:
+///        resolution, negative sizes or limits, min_quality outside [0, 0.5], adaptivity
+///        outside [0, 1], unknown integrator values. build_shell() calls it first.
+void check_options(const ShellOptions& options);
+
+/// Where the input came from and what validation did to it.
+struct InputReport {
+  std::string source;        ///< file path, or the name given to build_shell()
+  SurfaceStats stats;        ///< vertices, faces, components, genus, volume (after validation)
+  bool flipped = false;      ///< the input was oriented inward and was flipped
+};
+
+/// What the validity search did (docs/validity.md).
+struct ValidityReport {
+  int rounds = 0;
+  int checks_run = 0;
+  std::size_t moved_back_vertices = 0;
+  double moved_back_mean_fraction = 0;
+  std::size_t unwelded_vertices = 0;
+  std::size_t on_surface_vertices = 0;   ///< folded vertices kept on the surface
+  std::size_t cap_faces = 0;
+  std::size_t floor_drops = 0;
+  bool floor_valid = true;
+  double seconds = 0;
+};
+
+/// Counts of the assembled shell.
+struct ShellCounts {
+  std::size_t tets = 0;                        ///< <= 3 * faces
+  std::size_t points = 0;
+  std::size_t dropped_degenerate_tets = 0;     ///< tets with a repeated vertex after welding
+  std::size_t collapsed_prisms = 0;            ///< prisms whose inner vertices are one point
+  std::size_t welded_vertices = 0;             ///< surface vertices sharing an inner vertex
+  std::size_t thickness_limited_vertices = 0;  ///< vertices a thickness limit shortened
+};
+
+/// Seconds per stage (wall time of this call; reading and writing files are the caller's).
+struct StageTimings {
+  double fields = 0;
+  double trace = 0;
+  double inner = 0;     ///< thickness limits and welding
+  double validity = 0;  ///< the validity search, the final check and the quality summary
+  double check = 0;     ///< of which: the final full check
+  double total = 0;
+};
+
+/// Everything a run produced.
+struct ShellResult {
+  ShellOptions options;  ///< the options of the run
+  InputReport input;
+  /// The shell: points (surface vertices first, then inner vertices), positive tets, and per
+  /// tet `source_triangle` and `quality` (volume-length ratio), per point `inner` (1 for inner
+  /// vertices) and `thickness` (trace length, world units). Empty with traces_only.
+  TetMesh mesh;
+  /// The inner side as a surface (outward from the shell, i.e. facing the interior): one
+  /// triangle per input triangle, a vertex kept on the surface being its own inner vertex.
+  SurfaceMesh inner_surface;
+  /// The input surface after validation (the outer boundary of the shell).
+  SurfaceMesh surface;
+  TraceResult traces;                    ///< every vertex's trace, with stop reasons
+  FieldStats field_stats;                ///< voxel size, strategy, active voxels, seconds
+  std::map<std::string, std::string> field_parameters;  ///< as written into .vdb metadata
+  std::shared_ptr<const Fields> fields;  ///< only with ShellOptions::keep_fields
+  ShellCounts counts;
+  ShellCheckResult checks;               ///< the final full check (valid())
+  ValidityReport validity;
+  QualitySummary quality;                ///< histogram, min/median/mean Q, coverage, volume
+  StageTimings timings;
+  /// Every notice of the run, one sentence each: validation's (flipped, triangulated, dropped
+  /// vertices) first, then the fields' (interior filled by fast sweeping, ...).
+  std::vector<std::string> notices;
+  bool traces_only = false;              ///< built with ShellOptions::traces_only
+};
+
+/// Builds the shell of a validated surface (load_surface(), make_surface()).
+/// \throw InputError (bad options; the surface crosses itself; folded vertices the search could
+///        not keep valid), ResourceError, InternalError, CancelledError — see the file comment.
+ShellResult build_shell(const LoadedSurface& surface, const ShellOptions& options,
+                        const RunControl& control = {});
+
+/// Validates `mesh` as make_surface() does (closed, 2-manifold, finite, indices in range;
+/// messages name `source`) and builds its shell. Vertices no triangle uses are dropped (a
+/// notice says so), so the shell's first points are the used vertices in their order.
+ShellResult build_shell(const SurfaceMesh& mesh, const ShellOptions& options,
+                        const RunControl& control = {},
+                        const std::string& source = "surface mesh");
+
+/// The zero crossing of a .vdb level set (options.grid_name, options.adaptivity) as a validated
+/// surface: the surface a level set input is shelled on.
+LoadedSurface load_level_set_surface(const std::string& vdb_path, const ShellOptions& options);
+
+/// Meshes the level set of `vdb_path` (load_level_set_surface()) and shells it, using the same
+/// level set as the distance field (options.level_set must be empty).
+ShellResult build_shell_from_level_set(const std::string& vdb_path, const ShellOptions& options,
+                                       const RunControl& control = {});
+
+/// Output file names a report mentions (empty: not written).
+struct ReportFiles {
+  std::string shell;  ///< the tet mesh file
+};
+
+/// The JSON report of a run (docs/usage.md lists every key), pretty-printed with two spaces.
+/// `read_seconds` and `write_seconds` are the caller's file times (timings_s.read, .write);
+/// timings_s.total is the run's total plus both.
+std::string report_json(const ShellResult& result, const ReportFiles& files = {},
+                        double read_seconds = 0, double write_seconds = 0);
+
+/// Writes the shell to `path`, format from its extension (.vtu .vtk .msh .mesh .ele; .msh as
+/// Gmsh `msh_version` 41 or 22), atomically (writers.h).
+/// \throw InputError for an unknown extension; ResourceError if the file cannot be written.
+void write_shell(const std::string& path, const ShellResult& result, int msh_version = 41);
+
+/// Writes the inner surface (.obj .ply .off), atomically.
+void write_inner_surface(const std::string& path, const ShellResult& result);
+
+/// Writes the traces as VTK polylines (.vtk), atomically.
+void write_traces(const std::string& path, const ShellResult& result);
+
+/// Writes the fields and the traces to a .vdb file (write_grids()).
+/// \throw InputError if the result holds no fields (run with ShellOptions::keep_fields).
+void write_fields(const std::string& path, const ShellResult& result);
+
+}  // namespace vdb_shell

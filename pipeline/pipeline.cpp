@@ -1,0 +1,353 @@
+// pipeline.cpp — build_shell(): the stage sequence, the decisions between stages (the stored
+// flux's threshold, the diagnosis of a shell that could not be made valid), the inner surface
+// and the JSON report. The only place the pipeline is written down; the CLI, the Python module,
+// the tests and the benchmarks call it.
+#include "vdb_shell/vdb_shell.h"
+
+#include <nlohmann/json.hpp>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <sstream>
+#include <utility>
+
+#include "core/paths_io.h"
+#include "core/writers.h"
+#include "vdb_ops/point_index_vdb.h"
+
+namespace vdb_shell {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+void require(bool ok, const std::string& option, double value, const std::string& rule) {
+  if (ok) return;
+  std::ostringstream message;
+  message << option << " " << value << ": " << rule;
+  throw InputError(message.str());
+}
+
+/// Runs `body` in a TBB arena of `threads` workers (0: the default arena, all cores).
+template <class Body>
+auto in_arena(int threads, const Body& body) {
+  if (threads <= 0) return body();
+  tbb::task_arena arena(threads);
+  return arena.execute(body);
+}
+
+/// The message of a shell the search could not make valid: bad input when the surface crosses
+/// itself or folds sharper than the thinnest shell, a bug otherwise.
+[[noreturn]] void throw_invalid(const LoadedSurface& surface, const ValidShell& valid) {
+  const SurfaceMesh& mesh = surface.mesh;
+  const ShellCheckResult& checks = valid.checks;
+  // A surface that crosses itself bounds no single volume: bad input, not a search failure.
+  const auto crossing = surface_self_intersections(mesh, 1);
+  if (!crossing.empty()) {
+    const std::uint32_t f = crossing[0][0], g = crossing[0][1];
+    const Vec3d& p = mesh.points[mesh.triangles[f][0]];
+    std::ostringstream message;
+    message << surface.source << ": the surface intersects itself (triangles " << f << " and "
+            << g << ", near (" << p.x << ", " << p.y << ", " << p.z
+            << ")), so it bounds no single volume and no valid shell exists; repair it (for a "
+               ".vdb input, a lower --adaptivity); nothing was written";
+    throw InputError(message.str());
+  }
+  if (!valid.folded_vertices.empty()) {
+    const std::uint32_t v = valid.folded_vertices.front();
+    const Vec3d& p = mesh.points[v];
+    std::ostringstream message;
+    const std::size_t n = valid.folded_vertices.size();
+    message << surface.source << ": " << n
+            << (n == 1 ? " surface vertex is" : " surface vertices are")
+            << " folded: the incident faces have no common inward direction (first: vertex " << v
+            << " at (" << p.x << ", " << p.y << ", " << p.z
+            << ")); keeping them on the surface did not make the shell valid ("
+            << describe_problems(checks)
+            << "; likely a fold sharper than the thinnest shell); "
+               "remesh the surface around them (for a .vdb input, a lower --adaptivity); nothing "
+               "was written";
+    std::string text = message.str();
+    std::replace(text.begin(), text.end(), '\n', ';');
+    throw InputError(text);
+  }
+  std::string message = surface.source + ": could not make the shell valid after " +
+                        std::to_string(valid.rounds) + " rounds (" + describe_problems(checks) +
+                        ")" +
+                        (valid.floor_valid ? "" : "; the thinnest shell is invalid too: " +
+                                                      valid.floor_problems) +
+                        "; nothing was written — please report this input";
+  while (!message.empty() && message.back() == '\n') message.pop_back();
+  std::replace(message.begin(), message.end(), '\n', ';');
+  throw InternalError(message);
+}
+
+/// The inner side as a surface; a vertex kept on the surface is its own inner vertex.
+SurfaceMesh inner_surface_of(const SurfaceMesh& mesh, const ShellInput& input) {
+  SurfaceMesh inner;
+  inner.points = input.inner_points;
+  std::vector<std::uint32_t> id = input.inner_id;
+  for (std::uint32_t v = 0; v < id.size(); ++v)
+    if (id[v] == kOnSurface) {
+      id[v] = static_cast<std::uint32_t>(inner.points.size());
+      inner.points.push_back(mesh.points[v]);
+    }
+  inner.triangles.reserve(mesh.triangles.size());
+  for (const Triangle& t : mesh.triangles) inner.triangles.push_back({id[t[0]], id[t[2]], id[t[1]]});
+  return inner;
+}
+
+ShellResult run(const LoadedSurface& surface, const ShellOptions& options,
+                const RunControl& control) {
+  const auto t_total = Clock::now();
+  const SurfaceMesh& mesh = surface.mesh;
+  ShellResult r;
+  r.options = options;
+  r.input = {surface.source, surface.stats, surface.flipped};
+  r.surface = mesh;
+  r.notices = surface.notices;
+  r.traces_only = options.traces_only;
+
+  std::shared_ptr<const Fields> fields;
+  {
+    const auto t0 = Clock::now();
+    StageMonitor monitor(control, "fields");
+    ActiveStage active(monitor);
+    // The flux grid stores |flux| >= flux_min only: keep it at most rho / 2 (fields.h) so a
+    // smaller flux threshold still sees every value it asks about.
+    FieldOptions field_options = options.fields;
+    field_options.flux_min =
+        std::clamp(0.5 * options.trace.flux_threshold, 1e-3, field_options.flux_min);
+    fields = options.level_set.empty()
+                 ? build_fields(mesh, field_options, monitor)
+                 : fields_from_level_set(options.level_set, options.grid_name, mesh,
+                                         field_options, monitor);
+    monitor.finish();
+    r.timings.fields = seconds_since(t0);
+  }
+  r.field_stats = fields->stats();
+  r.field_parameters = fields->parameters();
+  r.notices.insert(r.notices.end(), r.field_stats.notices.begin(), r.field_stats.notices.end());
+  if (options.keep_fields) r.fields = fields;
+
+  {
+    const auto t0 = Clock::now();
+    StageMonitor monitor(control, "trace");
+    ActiveStage active(monitor);
+    r.traces = trace_paths(mesh, *fields, options.trace, make_vdb_point_index, monitor);
+    monitor.finish();
+    r.timings.trace = seconds_since(t0);
+  }
+  if (!options.keep_fields) fields.reset();  // the fields are not needed past the traces
+  if (options.traces_only) {
+    r.timings.total = seconds_since(t_total);
+    return r;
+  }
+
+  InnerVertices inner;
+  {
+    const auto t0 = Clock::now();
+    StageMonitor monitor(control, "inner");
+    inner = place_inner_vertices(mesh, r.traces, options.thickness);
+    monitor.finish();
+    r.timings.inner = seconds_since(t0);
+  }
+  {
+    const auto t0 = Clock::now();
+    StageMonitor monitor(control, "validity");
+    ActiveStage active(monitor);
+    ValidShell valid = make_valid_shell(mesh, r.traces, inner, options.validity, monitor);
+    r.quality = summarize_quality(mesh, valid.shell.mesh);
+    r.timings.validity = seconds_since(t0);
+    if (!valid.checks.valid()) throw_invalid(surface, valid);
+    monitor.finish();
+    r.timings.check = valid.checks.seconds;
+
+    const AssembleResult& shell = valid.shell;
+    r.counts.tets = shell.mesh.tets.size();
+    r.counts.points = shell.mesh.points.size();
+    r.counts.dropped_degenerate_tets = shell.dropped_degenerate_tets;
+    r.counts.collapsed_prisms = shell.collapsed_prisms;
+    r.counts.welded_vertices = inner.welded - std::min(inner.welded, valid.unwelded);
+    r.counts.thickness_limited_vertices = inner.limited;
+    r.validity.rounds = valid.rounds;
+    r.validity.checks_run = valid.checks_run;
+    r.validity.moved_back_vertices = valid.moved_back;
+    r.validity.moved_back_mean_fraction = valid.moved_back_mean;
+    r.validity.unwelded_vertices = valid.unwelded;
+    r.validity.on_surface_vertices = valid.on_surface.size();
+    r.validity.cap_faces = valid.cap_faces;
+    r.validity.floor_drops = valid.floor_drops;
+    r.validity.floor_valid = valid.floor_valid;
+    r.validity.seconds = valid.seconds;
+    r.checks = std::move(valid.checks);
+    r.inner_surface = inner_surface_of(mesh, valid.input);
+    r.mesh = std::move(valid.shell.mesh);
+  }
+  r.timings.total = seconds_since(t_total);
+  return r;
+}
+
+}  // namespace
+
+void check_options(const ShellOptions& o) {
+  const FieldOptions& f = o.fields;
+  if (f.voxel_size <= 0)
+    require(f.resolution >= kMinResolution && f.resolution <= 16384, "--resolution",
+            f.resolution, "must be in [" + std::to_string(kMinResolution) + ", 16384]");
+  require(std::isfinite(f.voxel_size) && f.voxel_size >= 0, "--voxel-size", f.voxel_size,
+          "must be a length >= 0 (0: use --resolution)");
+  require(std::isfinite(f.max_memory_gb) && f.max_memory_gb > 0, "--max-memory",
+          f.max_memory_gb, "must be a positive number of GiB");
+  const ThicknessOptions& t = o.thickness;
+  require(std::isfinite(t.max_thickness) && t.max_thickness >= 0, "--max-thickness",
+          t.max_thickness, "must be >= 0 (0: as thick as possible)");
+  require(std::isfinite(t.edge_factor) && t.edge_factor >= 0, "--thickness-edge-factor",
+          t.edge_factor, "must be >= 0 (0: no limit)");
+  require(o.validity.min_quality >= 0 && o.validity.min_quality <= 0.5, "--min-quality",
+          o.validity.min_quality, "must be in [0, 0.5]");
+  require(o.adaptivity >= 0 && o.adaptivity <= 1, "--adaptivity", o.adaptivity,
+          "must be in [0, 1]");
+  require(o.threads >= 0, "--threads", o.threads, "must be >= 0 (0: all cores)");
+}
+
+ShellResult build_shell(const LoadedSurface& surface, const ShellOptions& options,
+                        const RunControl& control) {
+  check_options(options);
+  return in_arena(options.threads, [&] { return run(surface, options, control); });
+}
+
+ShellResult build_shell(const SurfaceMesh& mesh, const ShellOptions& options,
+                        const RunControl& control, const std::string& source) {
+  PolygonSoup soup;
+  soup.points = mesh.points;
+  soup.polygons.reserve(mesh.triangles.size());
+  for (const Triangle& t : mesh.triangles) soup.polygons.push_back({t[0], t[1], t[2]});
+  return build_shell(make_surface(soup, source), options, control);
+}
+
+LoadedSurface load_level_set_surface(const std::string& vdb_path, const ShellOptions& options) {
+  require(options.adaptivity >= 0 && options.adaptivity <= 1, "--adaptivity",
+          options.adaptivity, "must be in [0, 1]");
+  return make_surface(level_set_to_soup(vdb_path, options.grid_name, options.adaptivity),
+                      vdb_path);
+}
+
+ShellResult build_shell_from_level_set(const std::string& vdb_path, const ShellOptions& options,
+                                       const RunControl& control) {
+  if (!options.level_set.empty())
+    throw InputError("a .vdb input is its own level set: leave ShellOptions::level_set empty "
+                     "(--level-set)");
+  ShellOptions with_level_set = options;
+  with_level_set.level_set = vdb_path;
+  return build_shell(load_level_set_surface(vdb_path, options), with_level_set, control);
+}
+
+std::string report_json(const ShellResult& r, const ReportFiles& files, double read_seconds,
+                        double write_seconds) {
+  nlohmann::ordered_json j;
+  const SurfaceStats& in = r.input.stats;
+  const FieldStats& fs = r.field_stats;
+  j["input"] = {{"file", r.input.source},
+                {"vertices", in.vertices},
+                {"faces", in.faces},
+                {"components", in.components},
+                {"genus", in.genus},
+                {"enclosed_volume", in.enclosed_volume},
+                {"flipped", r.input.flipped}};
+  j["fields"] = {{"voxel_size", fs.voxel_size},
+                 {"strategy", fs.strategy},
+                 {"sdf_active_voxels", fs.sdf_active_voxels},
+                 {"flux_active_voxels", fs.flux_active_voxels},
+                 {"seconds", {{"sdf", fs.seconds_sdf},
+                              {"interior", fs.seconds_fill + fs.seconds_refine},
+                              {"flux", fs.seconds_flux},
+                              {"gradient", fs.seconds_gradient}}}};
+  const TraceResult& traces = r.traces;
+  j["trace"] = {{"step", traces.parameters.step},
+                {"point_size", traces.parameters.point_size},
+                {"integrator", to_string(r.options.trace.integrator)},
+                {"planar_vertices",
+                 std::count(traces.planar.begin(), traces.planar.end(), std::uint8_t{1})},
+                {"samples", traces.samples.size()}};
+  j["stop_reasons"] = {{"critical", traces.count[0]},
+                       {"merge", traces.count[1]},
+                       {"flux", traces.count[2]},
+                       {"cap", traces.count[3]}};
+  if (!r.traces_only) {
+    const ShellCheckResult& checks = r.checks;
+    const ShellCounts& c = r.counts;
+    j["shell"] = {{"file", files.shell},
+                  {"tets", c.tets},
+                  {"points", c.points},
+                  {"coverage", r.quality.coverage},
+                  {"shell_volume", r.quality.shell_volume},
+                  {"inverted_tets", checks.inverted_tets},
+                  {"zero_volume_tets", checks.zero_volume_tets},
+                  {"intersecting_tet_pairs", checks.overlapping_pairs},
+                  {"outside_inner_vertices", checks.outside_inner_vertices},
+                  {"missing_surface_triangles", checks.missing_triangles},
+                  {"dropped_degenerate_tets", c.dropped_degenerate_tets},
+                  {"collapsed_prisms", c.collapsed_prisms},
+                  {"welded_vertices", c.welded_vertices},
+                  {"thickness_limited_vertices", c.thickness_limited_vertices},
+                  {"valid", checks.valid()}};
+    const ValidityReport& v = r.validity;
+    j["validity"] = {{"rounds", v.rounds},
+                     {"checks", v.checks_run},
+                     {"moved_back_vertices", v.moved_back_vertices},
+                     {"moved_back_mean_fraction", v.moved_back_mean_fraction},
+                     {"unwelded_vertices", v.unwelded_vertices},
+                     {"on_surface_vertices", v.on_surface_vertices},
+                     {"cap_faces", v.cap_faces},
+                     {"floor_drops", v.floor_drops},
+                     {"floor_valid", v.floor_valid},
+                     {"seconds", v.seconds}};
+    const QualitySummary& q = r.quality;
+    j["quality"] = {{"min", q.min_quality},
+                    {"median", q.median_quality},
+                    {"mean", q.mean_quality},
+                    {"min_dihedral_deg", q.min_dihedral_deg},
+                    {"non_positive", q.non_positive},
+                    {"histogram", q.histogram}};
+  }
+  const StageTimings& t = r.timings;
+  j["timings_s"] = {{"read", read_seconds},
+                    {"fields", t.fields},
+                    {"trace", t.trace},
+                    {"assemble", t.inner + t.validity},
+                    {"check", t.check},
+                    {"write", write_seconds},
+                    {"total", read_seconds + t.total + write_seconds}};
+  return j.dump(2) + "\n";
+}
+
+void write_shell(const std::string& path, const ShellResult& result, int msh_version) {
+  if (result.traces_only)
+    throw InputError(path + ": the run stopped after the traces (traces_only): no shell to write");
+  write_tet_mesh(path, result.mesh, tet_format_from_path(path, msh_version));
+}
+
+void write_inner_surface(const std::string& path, const ShellResult& result) {
+  if (result.traces_only)
+    throw InputError(path + ": the run stopped after the traces (traces_only): no inner surface");
+  write_surface(path, result.inner_surface);
+}
+
+void write_traces(const std::string& path, const ShellResult& result) {
+  write_paths_vtk(path, result.traces);
+}
+
+void write_fields(const std::string& path, const ShellResult& result) {
+  if (!result.fields)
+    throw InputError(path + ": the result holds no fields; build it with "
+                     "ShellOptions::keep_fields");
+  write_grids(path, *result.fields, result.fields->parameters(), &result.traces);
+}
+
+}  // namespace vdb_shell
