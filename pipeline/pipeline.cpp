@@ -219,6 +219,8 @@ void check_options(const ShellOptions& o) {
 ShellResult build_shell(const LoadedSurface& surface, const ShellOptions& options,
                         const RunControl& control) {
   check_options(options);
+  if (surface.mesh.triangles.empty())
+    throw InputError(surface.source + ": the surface has no triangles; give a closed surface");
   return in_arena(options.threads, [&] { return run(surface, options, control); });
 }
 

@@ -10,6 +10,7 @@ packages=(
   libgtest-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev
   libopenvdb-tools gmsh tetgen
   python3-meshio python3-numpy python3-scipy python3-matplotlib
+  python3-dev pybind11-dev python3-pytest
 )
 
 missing=()

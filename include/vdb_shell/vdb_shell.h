@@ -118,7 +118,8 @@ struct ShellResult {
   InputReport input;
   /// The shell: points (surface vertices first, then inner vertices), positive tets, and per
   /// tet `source_triangle` and `quality` (volume-length ratio), per point `inner` (1 for inner
-  /// vertices) and `thickness` (trace length, world units). Empty with traces_only.
+  /// vertices) and `thickness` (world units: an inner vertex's distance to the farthest surface
+  /// vertex it belongs to, 0 on the surface). Empty with traces_only.
   TetMesh mesh;
   /// The inner side as a surface (outward from the shell, i.e. facing the interior): one
   /// triangle per input triangle, a vertex kept on the surface being its own inner vertex.
