@@ -22,7 +22,7 @@
 #include <sstream>
 #include <tuple>
 
-#include "core/errors.h"
+#include "core/base/errors.h"
 
 namespace vdb_shell {
 namespace {

@@ -39,7 +39,7 @@
 #include <string>
 #include <vector>
 
-#include "core/surface_mesh.h"
+#include "core/base/surface_mesh.h"
 
 namespace vdb_shell {
 

@@ -20,8 +20,8 @@
 #include <signal.h>
 #include <unistd.h>
 
-#include "core/atomic_file.h"
-#include "core/writers.h"
+#include "core/write/atomic_file.h"
+#include "core/write/shell_writers.h"
 #include "vdb_shell/vdb_shell.h"
 
 #ifndef VDB_SHELL_VERSION

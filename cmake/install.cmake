@@ -18,11 +18,14 @@ install(TARGETS vdb_shell vdb_shell_shapes RUNTIME DESTINATION ${CMAKE_INSTALL_B
 
 # The public header and the headers of the types it hands out (none includes a dependency's).
 install(FILES include/vdb_shell/vdb_shell.h DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/vdb_shell)
-install(FILES
-  core/assemble.h core/errors.h core/field.h core/inner.h core/mesh_io.h core/point_index.h
-  core/quality.h core/run_control.h core/shell_checks.h core/surface_mesh.h core/tet_mesh.h
-  core/trace.h core/validate.h core/validity.h core/vec3.h
-  DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/vdb_shell/core)
+foreach(header
+    base/errors.h base/run_control.h base/surface_mesh.h base/tet_mesh.h base/vec3.h
+    read/load_surface.h read/polygon_soup.h trace/field_sampler.h trace/point_index.h
+    trace/trace.h inner/inner.h validity/search.h validity/shell_checks.h
+    assemble/assemble.h assemble/quality.h)
+  get_filename_component(folder ${header} DIRECTORY)
+  install(FILES core/${header} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/vdb_shell/core/${folder})
+endforeach()
 install(FILES vdb_ops/fields.h DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/vdb_shell/vdb_ops)
 
 install(EXPORT vdb_shell_targets NAMESPACE vdb_shell:: FILE vdb_shell-targets.cmake

@@ -13,8 +13,8 @@
 #include <sstream>
 #include <utility>
 
-#include "core/paths_io.h"
-#include "core/writers.h"
+#include "core/write/trace_writer.h"
+#include "core/write/shell_writers.h"
 #include "vdb_ops/point_index_vdb.h"
 
 namespace vdb_shell {

@@ -45,7 +45,7 @@ static_assert(std::is_standard_layout_v<Vec3d> && sizeof(Vec3d) == 3 * sizeof(do
               "Vec3d arrays are read as (n, 3) float64 arrays");
 
 // ---------------------------------------------------------------------------------------------
-// Exceptions: vdb_shell.Error and its subclasses, one per class of core/errors.h.
+// Exceptions: vdb_shell.Error and its subclasses, one per class of core/base/errors.h.
 
 struct ExceptionTypes {
   PyObject* error = nullptr;

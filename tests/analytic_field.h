@@ -8,7 +8,7 @@
 #include <functional>
 #include <memory>
 
-#include "core/field.h"
+#include "core/trace/field_sampler.h"
 
 namespace vdb_shell::test {
 

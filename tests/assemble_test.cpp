@@ -13,11 +13,11 @@
 #include <utility>
 
 #include "assets/shapes.h"
-#include "core/assemble.h"
-#include "core/errors.h"
-#include "core/inner.h"
-#include "core/quality.h"
-#include "core/shell_checks.h"
+#include "core/assemble/assemble.h"
+#include "core/base/errors.h"
+#include "core/inner/inner.h"
+#include "core/assemble/quality.h"
+#include "core/validity/shell_checks.h"
 
 namespace vdb_shell {
 namespace {

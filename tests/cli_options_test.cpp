@@ -21,7 +21,7 @@
 
 #include "assets/shapes.h"
 #include "cli/cli.h"
-#include "core/writers.h"
+#include "core/write/shell_writers.h"
 #include "tests/test_support.h"
 #include "vdb_ops/fields.h"
 #include "vdb_ops/trace_points.h"

@@ -16,7 +16,7 @@
 #include <unistd.h>
 
 #include "cli/cli.h"
-#include "core/atomic_file.h"
+#include "core/write/atomic_file.h"
 #include "tests/test_support.h"
 
 namespace vdb_shell {

@@ -14,8 +14,8 @@
 #include <string>
 
 #include "assets/shapes.h"
-#include "core/errors.h"
-#include "core/validate.h"
+#include "core/base/errors.h"
+#include "core/read/load_surface.h"
 #include "tests/test_support.h"
 #include "vdb_ops/fields.h"
 

@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "assets/shapes.h"
-#include "core/writers.h"
+#include "core/write/shell_writers.h"
 #include "tests/test_support.h"
 #include "vdb_shell/vdb_shell.h"
 

@@ -18,10 +18,10 @@
 #include <vector>
 
 #include "assets/shapes.h"
-#include "core/errors.h"
-#include "core/mesh_io.h"
-#include "core/surface_mesh.h"
-#include "core/validate.h"
+#include "core/base/errors.h"
+#include "core/read/polygon_soup.h"
+#include "core/base/surface_mesh.h"
+#include "core/read/load_surface.h"
 #include "tests/test_support.h"
 
 namespace vdb_shell {

@@ -14,9 +14,9 @@
 #include <utility>
 
 #include "assets/shapes.h"
-#include "core/assemble.h"
-#include "core/errors.h"
-#include "core/shell_checks.h"
+#include "core/assemble/assemble.h"
+#include "core/base/errors.h"
+#include "core/validity/shell_checks.h"
 
 namespace vdb_shell {
 namespace {

@@ -5,8 +5,8 @@
 #include <filesystem>
 #include <string>
 
-#include "core/surface_mesh.h"
-#include "core/tet_mesh.h"
+#include "core/base/surface_mesh.h"
+#include "core/base/tet_mesh.h"
 
 namespace vdb_shell::test {
 

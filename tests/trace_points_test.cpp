@@ -17,8 +17,8 @@
 #include <vector>
 
 #include "assets/shapes.h"
-#include "core/errors.h"
-#include "core/trace.h"
+#include "core/base/errors.h"
+#include "core/trace/trace.h"
 #include "tests/test_support.h"
 #include "vdb_ops/fields.h"
 #include "vdb_ops/trace_points.h"

@@ -7,8 +7,8 @@
 #include <cmath>
 
 #include "assets/shapes.h"
-#include "core/errors.h"
-#include "core/trace.h"
+#include "core/base/errors.h"
+#include "core/trace/trace.h"
 #include "tests/analytic_field.h"
 
 namespace vdb_shell {

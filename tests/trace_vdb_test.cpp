@@ -1,4 +1,4 @@
-// trace_vdb_test.cpp — path tracing (core/trace.h) on real OpenVDB fields (vdb_ops/fields.h) and
+// trace_vdb_test.cpp — path tracing (core/trace/trace.h) on real OpenVDB fields (vdb_ops/fields.h) and
 // the PointIndexGrid point index (vdb_ops/point_index_vdb.h).
 //
 // References: the cube [-0.5, 0.5]^3 (every trace of the paper's 2x2-per-face box runs straight
@@ -22,7 +22,7 @@
 #include <vector>
 
 #include "assets/shapes.h"
-#include "core/trace.h"
+#include "core/trace/trace.h"
 #include "vdb_ops/fields.h"
 #include "vdb_ops/point_index_vdb.h"
 

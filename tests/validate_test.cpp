@@ -7,9 +7,9 @@
 #include <fstream>
 #include <string>
 
-#include "core/errors.h"
-#include "core/mesh_io.h"
-#include "core/validate.h"
+#include "core/base/errors.h"
+#include "core/read/polygon_soup.h"
+#include "core/read/load_surface.h"
 #include "tests/test_support.h"
 
 namespace vdb_shell {

@@ -1,4 +1,4 @@
-// writers_test.cpp — tests of core/writers.h and core/atomic_file.h.
+// writers_test.cpp — tests of core/write/shell_writers.h and core/write/atomic_file.h.
 //
 // Every tet-mesh format is read back by a real reader (meshio through /usr/bin/python3; the
 // TetGen triple also by a small parser here and by ../shared/eval/check_shell.py): the tet count,
@@ -20,10 +20,10 @@
 #include <string>
 #include <vector>
 
-#include "core/atomic_file.h"
-#include "core/errors.h"
-#include "core/tet_mesh.h"
-#include "core/writers.h"
+#include "core/write/atomic_file.h"
+#include "core/base/errors.h"
+#include "core/base/tet_mesh.h"
+#include "core/write/shell_writers.h"
 #include "tests/test_support.h"
 
 namespace vdb_shell {

@@ -42,8 +42,8 @@
 #include <tuple>
 #include <unordered_map>
 
-#include "core/atomic_file.h"
-#include "core/errors.h"
+#include "core/write/atomic_file.h"
+#include "core/base/errors.h"
 // After the OpenVDB headers: declares make_trace_points_grid() (vdb_ops/trace_points.h).
 #include "vdb_ops/trace_points.h"
 

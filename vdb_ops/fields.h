@@ -1,7 +1,7 @@
 // fields.h — the distance, gradient and flux fields of a closed surface (pipeline stage 2).
 //
 // Built over OpenVDB grids, but this header includes no OpenVDB header: the grids live behind
-// Fields' pimpl and reach core/ through the FieldSampler interface (core/field.h).
+// Fields' pimpl and reach core/ through the FieldSampler interface (core/trace/field_sampler.h).
 //
 //   surface   FloatGrid, class GRID_LEVEL_SET: signed distance to the mesh, world units, negative
 //             inside. The interior is filled (every voxel inside is active, down to the deepest
@@ -41,15 +41,15 @@
 #include <string>
 #include <vector>
 
-#include "core/field.h"
-#include "core/mesh_io.h"
-#include "core/run_control.h"
-#include "core/surface_mesh.h"
-#include "core/vec3.h"
+#include "core/trace/field_sampler.h"
+#include "core/read/polygon_soup.h"
+#include "core/base/run_control.h"
+#include "core/base/surface_mesh.h"
+#include "core/base/vec3.h"
 
 namespace vdb_shell {
 
-struct TraceResult;  // core/trace.h
+struct TraceResult;  // core/trace/trace.h
 
 /// Smallest accepted resolution (voxels along the longest bounding-box side).
 inline constexpr int kMinResolution = 8;

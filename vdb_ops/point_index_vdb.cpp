@@ -8,7 +8,7 @@
 #include <cmath>
 #include <string>
 
-#include "core/errors.h"
+#include "core/base/errors.h"
 
 namespace vdb_shell {
 namespace {

@@ -1,7 +1,7 @@
 // point_index_vdb.h — the merge queries' point index over OpenVDB's tools::PointIndexGrid (the
 // paper's spatial hashing, DESIGN step 5).
 //
-// Implements core's PointIndex (core/point_index.h); no OpenVDB header is included here. The
+// Implements core's PointIndex (core/trace/point_index.h); no OpenVDB header is included here. The
 // points are bucketed into a PointIndexGrid with cubic voxels of edge `radius` (world units);
 // find_within_unordered() runs a radial tools::PointIndexIterator search with a slightly larger
 // radius and keeps the points with |point - p|^2 <= radius^2, evaluated in double precision in
@@ -16,8 +16,8 @@
 #include <memory>
 #include <vector>
 
-#include "core/point_index.h"
-#include "core/vec3.h"
+#include "core/trace/point_index.h"
+#include "core/base/vec3.h"
 
 namespace vdb_shell {
 

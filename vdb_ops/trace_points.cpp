@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "core/errors.h"
+#include "core/base/errors.h"
 // After the OpenVDB headers: trace_points.h then declares make_trace_points_grid() too.
 #include "vdb_ops/trace_points.h"
 

@@ -31,8 +31,8 @@
 #include <utility>
 #include <vector>
 
-#include "core/trace.h"
-#include "core/vec3.h"
+#include "core/trace/trace.h"
+#include "core/base/vec3.h"
 
 namespace vdb_shell {
 

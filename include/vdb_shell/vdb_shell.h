@@ -8,13 +8,13 @@
 // Stages, in order: fields (the filled signed distance field and the flux, OpenVDB), trace (every
 // surface vertex traced inward), inner (thickness limits and welding), validity (the thickest
 // valid shell along the traces, with one full independent-style check). Each reports progress
-// and checks the cancel flag through RunControl (core/run_control.h).
+// and checks the cancel flag through RunControl (core/base/run_control.h).
 //
 // Units and frame: everything in the input's world units and frame. Sign: the SDF is negative
 // inside. Tets are positively oriented (tet_volume > 0); the first points of the shell are the
 // surface's vertices, unchanged, followed by the inner vertices.
 //
-// Errors (core/errors.h): InputError for a surface or options that cannot be used (the message
+// Errors (core/base/errors.h): InputError for a surface or options that cannot be used (the message
 // names the source, the first offending element and the fix); ResourceError for memory budgets
 // and files; InternalError if a shell broke an invariant (a bug: please report the input);
 // CancelledError when RunControl::cancel was set. A failed call writes nothing and changes no
@@ -27,16 +27,16 @@
 #include <string>
 #include <vector>
 
-#include "core/errors.h"
-#include "core/inner.h"
-#include "core/quality.h"
-#include "core/run_control.h"
-#include "core/shell_checks.h"
-#include "core/surface_mesh.h"
-#include "core/tet_mesh.h"
-#include "core/trace.h"
-#include "core/validate.h"
-#include "core/validity.h"
+#include "core/base/errors.h"
+#include "core/inner/inner.h"
+#include "core/assemble/quality.h"
+#include "core/base/run_control.h"
+#include "core/validity/shell_checks.h"
+#include "core/base/surface_mesh.h"
+#include "core/base/tet_mesh.h"
+#include "core/trace/trace.h"
+#include "core/read/load_surface.h"
+#include "core/validity/search.h"
 #include "vdb_ops/fields.h"
 
 namespace vdb_shell {
@@ -175,7 +175,7 @@ std::string report_json(const ShellResult& result, const ReportFiles& files = {}
                         double read_seconds = 0, double write_seconds = 0);
 
 /// Writes the shell to `path`, format from its extension (.vtu .vtk .msh .mesh .ele; .msh as
-/// Gmsh `msh_version` 41 or 22), atomically (writers.h).
+/// Gmsh `msh_version` 41 or 22), atomically (core/write/shell_writers.h).
 /// \throw InputError for an unknown extension; ResourceError if the file cannot be written.
 void write_shell(const std::string& path, const ShellResult& result, int msh_version = 41);
 

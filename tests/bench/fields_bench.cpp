@@ -41,9 +41,9 @@
 #include <vector>
 
 #include "assets/shapes.h"
-#include "core/errors.h"
-#include "core/validate.h"
-#include "core/writers.h"
+#include "core/base/errors.h"
+#include "core/read/load_surface.h"
+#include "core/write/shell_writers.h"
 #include "vdb_ops/fields.h"
 
 namespace vdb_shell {

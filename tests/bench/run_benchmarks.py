@@ -21,7 +21,7 @@ Sections (--sections, comma-separated; default all):
   threads  the same two meshes at --thread-resolution with -j 1 and -j 2 (alternating): per-stage
            medians and speed-ups.
   peers    TetGen (tetgen -pQ and -pqQ) on the table1 and meshes surfaces: wall time, tets, min and
-           median volume-length quality (vdb_shell's formula, core/quality.cpp), beside vdb_shell.
+           median volume-length quality (vdb_shell's formula, core/assemble/quality.cpp), beside vdb_shell.
   targets  (always) the issue's targets, met or missed by how much; nothing is asserted.
 
 --quick: 1 run per point, scaling at 64 and 128 on fandisk only, threads at 128 (about 1-2
@@ -407,7 +407,7 @@ def read_tetgen(prefix):
 
 def tet_quality(points, tets):
     """Volume-length ratio Q = 6 sqrt(2) V / l_rms^3 per tet, V the signed volume
-    dot(cross(b - a, c - a), d - a) / 6: the formula of core/quality.cpp tet_quality()
+    dot(cross(b - a, c - a), d - a) / 6: the formula of core/assemble/quality.cpp tet_quality()
     (regular tet 1, flat 0, inverted < 0; 0 when every edge has zero length)."""
     if len(tets) == 0:
         return np.zeros(0)
@@ -426,7 +426,7 @@ def tet_quality(points, tets):
 
 
 def quality_summary(q):
-    """min and median like core/quality.cpp summarize_quality (median of an even count is the
+    """min and median like core/assemble/quality.cpp summarize_quality (median of an even count is the
     mean of the two middle values, as numpy's)."""
     if len(q) == 0:
         return {"tets": 0, "min": None, "median": None, "mean": None, "non_positive": 0}
@@ -1186,7 +1186,7 @@ class Suite:
         text = ["## Peers: TetGen on the same surfaces", "",
                 "time s: wall time of the process (vdb_shell: median over its runs; TetGen: one "
                 "run, including its file output). Q: volume-length ratio 6 sqrt(2) V / l_rms^3, "
-                "computed here for TetGen with vdb_shell's formula (core/quality.cpp), which is "
+                "computed here for TetGen with vdb_shell's formula (core/assemble/quality.cpp), which is "
                 "checked against vdb_shell's own reports (quality formula check lines).", "",
                 md_table(["mesh", "F", "method", "T", "time s", "min Q", "median Q", "peak MiB"],
                          rows)]

@@ -1,4 +1,4 @@
-// trace_bench.cpp — path tracing and merge resolution (core/trace.h) on OpenVDB fields: traces
+// trace_bench.cpp — path tracing and merge resolution (core/trace/trace.h) on OpenVDB fields: traces
 // per second and total trace time with 1 and 2 threads, beside the field build time of the same
 // run.
 //
@@ -24,8 +24,8 @@
 #include <vector>
 
 #include "assets/shapes.h"
-#include "core/trace.h"
-#include "core/validate.h"
+#include "core/trace/trace.h"
+#include "core/read/load_surface.h"
 #include "vdb_ops/fields.h"
 
 namespace vdb_shell {

@@ -1,0 +1,192 @@
+// assemble.cpp — see assemble.h.
+#include "core/assemble/assemble.h"
+
+#include <algorithm>
+#include <chrono>
+#include <limits>
+#include <string>
+
+#include "core/base/errors.h"
+#include "core/assemble/quality.h"
+
+namespace vdb_shell {
+namespace {
+
+using LocalTet = std::array<int, 4>;  // corners of the prism: 0, 1, 2 outer; 3, 4, 5 inner
+using LocalSplit = std::array<LocalTet, 3>;
+
+// splits[m][cut]: the split when corner m has the smallest index; cut 0 cuts the third quad
+// along V2-V6, cut 1 along V3-V5. Every tet listed in positive order.
+struct SplitTable {
+  LocalSplit splits[6][2];
+};
+
+// Corner positions of the reference right prism: the outer triangle counter-clockwise seen
+// from +z (outside), the inner one a unit below it (inside).
+constexpr Vec3d kReferenceCorner[6] = {{0, 0, 0}, {1, 0, 0},  {0, 1, 0},
+                                       {0, 0, -1}, {1, 0, -1}, {0, 1, -1}};
+
+// Corner V(i+1) of the prism whose smallest corner is m: the prism symmetry taking m to V1 is a
+// rotation of the triangles, plus the exchange of outer and inner triangle when m is inner.
+int corner_role(int m, int i) {
+  const int r = m % 3;
+  const int top = m < 3 ? 0 : 3;
+  return (i < 3 ? top : 3 - top) + (r + i) % 3;
+}
+
+// The orientation of a tet follows from its place in the prism alone: its sign in the
+// reference prism. Swapping the last two corners turns a negative order positive.
+LocalTet oriented(LocalTet t) {
+  const double v = tet_volume(kReferenceCorner[t[0]], kReferenceCorner[t[1]],
+                              kReferenceCorner[t[2]], kReferenceCorner[t[3]]);
+  if (v < 0.0) std::swap(t[2], t[3]);
+  return t;
+}
+
+SplitTable make_split_table() {
+  SplitTable table{};
+  for (int m = 0; m < 6; ++m) {
+    int v[6];  // v[i] is corner V(i+1) of assemble.h
+    for (int i = 0; i < 6; ++i) v[i] = corner_role(m, i);
+    table.splits[m][0] = {oriented({v[0], v[1], v[2], v[5]}),
+                          oriented({v[0], v[1], v[5], v[4]}),
+                          oriented({v[0], v[4], v[5], v[3]})};
+    table.splits[m][1] = {oriented({v[0], v[1], v[2], v[4]}),
+                          oriented({v[0], v[4], v[2], v[5]}),
+                          oriented({v[0], v[4], v[5], v[3]})};
+  }
+  return table;
+}
+
+const SplitTable& split_table() {
+  static const SplitTable table = make_split_table();
+  return table;
+}
+
+}  // namespace
+
+PrismTets split_prism(const std::array<std::uint32_t, 6>& ids) {
+  int m = 0;
+  for (int k = 1; k < 6; ++k)
+    if (ids[k] < ids[m]) m = k;
+  const std::uint32_t v2 = ids[corner_role(m, 1)], v3 = ids[corner_role(m, 2)];
+  const std::uint32_t v5 = ids[corner_role(m, 4)], v6 = ids[corner_role(m, 5)];
+  const int cut = std::min(v2, v6) < std::min(v3, v5) ? 0 : 1;
+
+  PrismTets out;
+  for (const LocalTet& lt : split_table().splits[m][cut]) {
+    const Tet t = {ids[lt[0]], ids[lt[1]], ids[lt[2]], ids[lt[3]]};
+    const bool distinct = t[0] != t[1] && t[0] != t[2] && t[0] != t[3] && t[1] != t[2] &&
+                          t[1] != t[3] && t[2] != t[3];
+    if (distinct)
+      out.tets[out.count++] = t;
+    else
+      ++out.dropped;
+  }
+  return out;
+}
+
+AssembleResult assemble_shell(const SurfaceMesh& surface, const ShellInput& input,
+                              const AssembleOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  const std::size_t n_surface = surface.points.size();
+  const std::size_t n_inner = input.inner_points.size();
+  if (input.inner_id.size() != n_surface)
+    throw InputError("assemble_shell: " + std::to_string(input.inner_id.size()) +
+                     " inner ids for " + std::to_string(n_surface) +
+                     " surface vertices; give one inner id per surface vertex");
+  const std::size_t n_points = n_surface + n_inner + input.cap_points.size();
+  if (n_points > std::numeric_limits<std::uint32_t>::max())
+    throw InputError("assemble_shell: " + std::to_string(n_points) +
+                     " points do not fit 32-bit indices");
+  for (std::size_t v = 0; v < n_surface; ++v)
+    if (input.inner_id[v] >= n_inner && input.inner_id[v] != kOnSurface)
+      throw InputError("assemble_shell: surface vertex " + std::to_string(v) +
+                       " refers to inner vertex " + std::to_string(input.inner_id[v]) +
+                       ", but there are only " + std::to_string(n_inner) + " inner points");
+  const std::size_t n_caps = input.cap_faces.size();
+  if (input.cap_points.size() != n_caps)
+    throw InputError("assemble_shell: " + std::to_string(input.cap_points.size()) +
+                     " cap points for " + std::to_string(n_caps) + " cap faces; give one each");
+  std::vector<std::uint32_t> cap_of(surface.triangles.size(), UINT32_MAX);
+  for (std::size_t k = 0; k < n_caps; ++k) {
+    const std::uint32_t f = input.cap_faces[k];
+    if (f >= surface.triangles.size() || (k > 0 && f <= input.cap_faces[k - 1]))
+      throw InputError("assemble_shell: cap face " + std::to_string(f) +
+                       " is out of range or order; list faces once, ascending");
+    for (const std::uint32_t v : surface.triangles[f])
+      if (v < n_surface && input.inner_id[v] != kOnSurface)
+        throw InputError("assemble_shell: cap face " + std::to_string(f) + " has vertex " +
+                         std::to_string(v) + " off the surface; a cap face needs all three "
+                         "corners kOnSurface");
+    cap_of[f] = static_cast<std::uint32_t>(k);
+  }
+  for (std::size_t f = 0; f < surface.triangles.size(); ++f)
+    for (const std::uint32_t v : surface.triangles[f])
+      if (v >= n_surface)
+        throw InputError("assemble_shell: triangle " + std::to_string(f) + " refers to vertex " +
+                         std::to_string(v) + ", but the surface has " +
+                         std::to_string(n_surface) + " vertices");
+
+  AssembleResult result;
+  TetMesh& mesh = result.mesh;
+  mesh.points = surface.points;
+  mesh.points.insert(mesh.points.end(), input.inner_points.begin(), input.inner_points.end());
+  mesh.points.insert(mesh.points.end(), input.cap_points.begin(), input.cap_points.end());
+  mesh.inner.assign(mesh.points.size(), 0);
+  std::fill(mesh.inner.begin() + static_cast<std::ptrdiff_t>(n_surface), mesh.inner.end(), 1);
+
+  // Thickness of an inner vertex: its distance to the farthest surface vertex that ends there.
+  mesh.thickness.assign(mesh.points.size(), 0.0);
+  std::vector<std::uint8_t> used(n_inner, 0);
+  for (std::size_t v = 0; v < n_surface; ++v) {
+    const std::uint32_t i = input.inner_id[v];
+    if (i == kOnSurface) {
+      ++result.on_surface_vertices;
+      continue;
+    }
+    used[i] = 1;
+    double& t = mesh.thickness[n_surface + i];
+    t = std::max(t, distance(surface.points[v], input.inner_points[i]));
+  }
+  const std::size_t n_used = static_cast<std::size_t>(std::count(used.begin(), used.end(), 1));
+  result.welded_inner_vertices = n_surface - result.on_surface_vertices - n_used;
+  result.unused_inner_points = n_inner - n_used;
+
+  const std::size_t n_faces = surface.triangles.size();
+  mesh.tets.reserve(3 * n_faces);
+  mesh.source_triangle.reserve(3 * n_faces);
+  for (std::size_t f = 0; f < n_faces; ++f) {
+    const Triangle& tri = surface.triangles[f];
+    const std::uint32_t a = tri[0], b = tri[1], c = tri[2];
+    const auto inner = [&](std::uint32_t v) {
+      const std::uint32_t i = input.inner_id[v];
+      return i == kOnSurface ? v : static_cast<std::uint32_t>(n_surface + i);
+    };
+    if (cap_of[f] != UINT32_MAX) {  // the face and its cap point, as a prism's first tet
+      const std::uint32_t x = static_cast<std::uint32_t>(n_surface + n_inner + cap_of[f]);
+      mesh.tets.push_back({a, b, x, c});
+      mesh.source_triangle.push_back(static_cast<std::uint32_t>(f));
+      mesh.thickness[x] = std::max({distance(mesh.points[x], surface.points[a]),
+                                    distance(mesh.points[x], surface.points[b]),
+                                    distance(mesh.points[x], surface.points[c])});
+      ++result.cap_tets;
+      continue;
+    }
+    const std::uint32_t ai = inner(a), bi = inner(b), ci = inner(c);
+    if (ai == bi && bi == ci) ++result.collapsed_prisms;
+    const PrismTets prism = split_prism({a, b, c, ai, bi, ci});
+    for (int k = 0; k < prism.count; ++k) {
+      mesh.tets.push_back(prism.tets[k]);
+      mesh.source_triangle.push_back(static_cast<std::uint32_t>(f));
+    }
+    result.dropped_degenerate_tets += static_cast<std::size_t>(prism.dropped);
+  }
+  result.tets = mesh.tets.size();
+  if (options.compute_quality) mesh.quality = tet_qualities(mesh);
+  result.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+}  // namespace vdb_shell

@@ -1,0 +1,109 @@
+// assemble.h — building the tet shell from the surface and its traced inner vertices
+// (design step 6).
+//
+// Every input triangle (a, b, c) and the inner vertices (a', b', c') of its corners span a
+// prism, split into 3 tets without Steiner points by the rule of Dompierre, Labbe, Vallet and
+// Camarero, "How to subdivide pyramids, prisms and hexahedra into tetrahedra" (IMR 1999): every
+// quad side (a, b, b', a') is cut along the diagonal through its vertex with the smallest global
+// index, so the two prisms sharing a quad always cut it the same way and the tet mesh is
+// conforming. The smallest index of the whole prism lies on two of its quads, whose diagonals
+// both start at it; the three diagonals therefore never form a cycle and a 3-tet split always
+// exists (split_prism() below lists the cases).
+//
+// Welding: several surface vertices may share one inner vertex. Tets whose four vertices are
+// then no longer distinct are dropped (Dompierre et al.'s post-processing); a prism whose three
+// inner vertices are one point keeps exactly one tet, (a, b, c) with the apex. A prism with two
+// welded inner corners keeps one or two tets; whether its neighbours across the collapsed side
+// still meet it face to face depends on where the welded vertex lies — check_shell() tells.
+//
+// Orientation: the vertex order of every tet is fixed combinatorially — from its place in the
+// prism, never from computed coordinates — such that the tet is positive (tet_volume > 0,
+// vec3.h) whenever its prism is not inverted, i.e. (a, b, c) counter-clockwise seen from
+// outside and the inner vertices on the inner side. A geometrically inverted prism therefore
+// gives negative tets, which check_shell() (shell_checks.h) reports; nothing is flipped.
+//
+// Units: world units throughout (the input's); thickness is a length in world units.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "core/base/surface_mesh.h"
+#include "core/base/tet_mesh.h"
+#include "core/base/vec3.h"
+
+namespace vdb_shell {
+
+/// The inner side of the shell: where every surface vertex ended its inward trace.
+struct ShellInput {
+  /// Inner vertex positions, world units. Several surface vertices may share one (welded).
+  std::vector<Vec3d> inner_points;
+  /// Per surface vertex v: index into inner_points of v's inner vertex, or kOnSurface. Size
+  /// num_vertices().
+  std::vector<std::uint32_t> inner_id;
+  /// Faces whose three corners are kOnSurface, each with one extra inner point below it: the
+  /// face's prism is the single tet from the face to that point (ascending faces).
+  std::vector<std::uint32_t> cap_faces;
+  std::vector<Vec3d> cap_points;  ///< one per cap face, after inner_points in the tet mesh
+};
+
+/// inner_id of a vertex that is its own inner vertex: the shell has zero thickness there and its
+/// prisms become pyramids (two tets) or, with two such corners, one tet. A face with three such
+/// corners has no prism, unless it is a cap face (ShellInput::cap_faces).
+constexpr std::uint32_t kOnSurface = 0xFFFFFFFFu;
+
+struct AssembleOptions {
+  /// Fill TetMesh::quality with the volume-length ratio of every tet (quality.h).
+  bool compute_quality = true;
+};
+
+/// The shell and what assembling it did.
+struct AssembleResult {
+  /// points: the surface points (same indices), then inner_points (surface index count + i);
+  /// tets: positive when their prism is not inverted; source_triangle and (optionally)
+  /// quality per tet; inner (1 for inner points) and thickness per point.
+  TetMesh mesh;
+  std::size_t tets = 0;                     ///< mesh.tets.size(), <= 3 * faces
+  std::size_t dropped_degenerate_tets = 0;  ///< tets with a repeated vertex, dropped
+  std::size_t collapsed_prisms = 0;         ///< prisms whose three inner vertices are one
+  std::size_t on_surface_vertices = 0;      ///< surface vertices with inner_id kOnSurface
+  std::size_t cap_tets = 0;                 ///< tets of cap faces
+  std::size_t welded_inner_vertices = 0;    ///< surface vertices - distinct inner vertices used
+  std::size_t unused_inner_points = 0;      ///< inner points no surface vertex refers to
+  double seconds = 0.0;                     ///< wall time of assemble_shell()
+};
+
+/// The tets of one prism, in the order of the global-index rule.
+struct PrismTets {
+  std::array<Tet, 3> tets{};  ///< the first `count` entries are used
+  int count = 0;              ///< 3, or fewer after dropping tets with a repeated vertex
+  int dropped = 0;            ///< 3 - count
+};
+
+/// Splits the prism with global vertex indices `ids` = {a, b, c, a', b', c'} into tets.
+///
+/// (a, b, c) is the outer triangle, counter-clockwise seen from outside; a', b', c' are the
+/// inner vertices of a, b, c (on the inner side). Let V1 be the corner with the smallest index
+/// (the first such corner when welded corners repeat an index), V2, V3 the other corners of its
+/// triangle, V4, V5, V6 the corners joined to V1, V2, V3 by the prism's side edges. The side
+/// quads through V1 are cut from V1; the third quad (V2, V3, V6, V5) is cut along V2-V6 when
+/// min(V2, V6) < min(V3, V5), giving
+///     (V1, V2, V3, V6), (V1, V2, V6, V5), (V1, V5, V6, V4),
+/// otherwise along V3-V5, giving
+///     (V1, V2, V3, V5), (V1, V5, V3, V6), (V1, V5, V6, V4).
+/// V1 ranges over the six corners and the third quad has two cuts: 12 cases. The vertex order
+/// of each tet is then that of its positive orientation in the right prism with the given
+/// conventions. Tets with a repeated index are dropped.
+PrismTets split_prism(const std::array<std::uint32_t, 6>& ids);
+
+/// Builds the tet shell of `surface` with the inner vertices `input`.
+/// \pre surface is closed and outward oriented (load_surface()); input.inner_points lie inside.
+///      Neither is checked here: check_shell() (shell_checks.h) verifies the result.
+/// \throw InputError if input.inner_id does not have one entry per surface vertex, an inner id
+///        or a triangle index is out of range, or the point count does not fit 32-bit indices.
+AssembleResult assemble_shell(const SurfaceMesh& surface, const ShellInput& input,
+                              const AssembleOptions& options = {});
+
+}  // namespace vdb_shell

@@ -1,0 +1,103 @@
+// quality.cpp — see quality.h.
+#include "core/assemble/quality.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+namespace vdb_shell {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+}  // namespace
+
+double tet_quality(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
+  const double sum2 = norm2(b - a) + norm2(c - a) + norm2(d - a) + norm2(c - b) + norm2(d - b) +
+                      norm2(d - c);
+  if (!(sum2 > 0.0)) return 0.0;
+  const double l_rms = std::sqrt(sum2 / 6.0);
+  return 6.0 * std::sqrt(2.0) * tet_volume(a, b, c, d) / (l_rms * l_rms * l_rms);
+}
+
+double tet_min_dihedral_deg(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
+  // n[k]: normal of the face opposite corner k, pointing away from corner k.
+  const std::array<Vec3d, 4> p = {a, b, c, d};
+  std::array<Vec3d, 4> n;
+  for (int k = 0; k < 4; ++k) {
+    const Vec3d& u = p[(k + 1) % 4];
+    const Vec3d& v = p[(k + 2) % 4];
+    const Vec3d& w = p[(k + 3) % 4];
+    Vec3d m = cross(v - u, w - u);
+    if (dot(m, p[k] - u) > 0.0) m = -m;
+    const double len = norm(m);
+    if (!(len > 0.0)) return 0.0;
+    n[k] = m / len;
+  }
+  // The dihedral angle at the edge shared by the faces opposite k and l is pi minus the angle
+  // between their outward normals.
+  double min_angle = kPi;
+  for (int k = 0; k < 4; ++k) {
+    for (int l = k + 1; l < 4; ++l) {
+      const double c_kl = std::clamp(-dot(n[k], n[l]), -1.0, 1.0);
+      min_angle = std::min(min_angle, std::acos(c_kl));
+    }
+  }
+  return min_angle * 180.0 / kPi;
+}
+
+std::vector<double> tet_qualities(const TetMesh& mesh) {
+  std::vector<double> q(mesh.tets.size());
+  for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
+    const Tet& v = mesh.tets[t];
+    q[t] = tet_quality(mesh.points[v[0]], mesh.points[v[1]], mesh.points[v[2]], mesh.points[v[3]]);
+  }
+  return q;
+}
+
+QualitySummary summarize_quality(const SurfaceMesh& surface, const TetMesh& mesh,
+                                 const QualityOptions& options) {
+  QualitySummary s;
+  s.tets = mesh.tets.size();
+  const std::size_t bins = std::max<std::size_t>(options.histogram_bins, 1);
+  s.histogram.assign(bins, 0);
+  s.enclosed_volume = signed_volume(surface);
+
+  std::vector<double> q =
+      mesh.quality.size() == mesh.tets.size() ? mesh.quality : tet_qualities(mesh);
+  double min_dihedral = 180.0;
+  double volume = 0.0;
+  for (const Tet& v : mesh.tets) {
+    const Vec3d& a = mesh.points[v[0]];
+    volume += tet_volume(a, mesh.points[v[1]], mesh.points[v[2]], mesh.points[v[3]]);
+    min_dihedral = std::min(
+        min_dihedral, tet_min_dihedral_deg(a, mesh.points[v[1]], mesh.points[v[2]],
+                                           mesh.points[v[3]]));
+  }
+  s.shell_volume = volume;
+  s.coverage = s.enclosed_volume > 0.0 ? volume / s.enclosed_volume : 0.0;
+  if (q.empty()) return s;
+  s.min_dihedral_deg = min_dihedral;
+
+  double sum = 0.0;
+  for (const double x : q) {
+    sum += x;
+    if (!(x > 0.0)) {
+      ++s.non_positive;
+      continue;
+    }
+    // (i/n, (i+1)/n] -> i; values above 1 (rounding) go to the last bin.
+    const double scaled = std::ceil(x * static_cast<double>(bins)) - 1.0;
+    const std::size_t bin =
+        static_cast<std::size_t>(std::clamp(scaled, 0.0, static_cast<double>(bins - 1)));
+    ++s.histogram[bin];
+  }
+  s.mean_quality = sum / static_cast<double>(q.size());
+  std::sort(q.begin(), q.end());
+  s.min_quality = q.front();
+  const std::size_t mid = q.size() / 2;
+  s.median_quality = q.size() % 2 == 1 ? q[mid] : 0.5 * (q[mid - 1] + q[mid]);
+  return s;
+}
+
+}  // namespace vdb_shell

@@ -1,0 +1,29 @@
+// tet_mesh.h — the tetrahedral shell every writer and check reads.
+//
+// Conventions: coordinates in world units (the input's); every tet (a, b, c, d) is positively
+// oriented: tet_volume(a, b, c, d) > 0, i.e. (a, b, c) counter-clockwise seen from outside the
+// tet, the convention of VTK, Gmsh and TetGen alike.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "core/base/vec3.h"
+
+namespace vdb_shell {
+
+using Tet = std::array<std::uint32_t, 4>;
+
+struct TetMesh {
+  std::vector<Vec3d> points;  ///< world units
+  std::vector<Tet> tets;      ///< positively oriented
+
+  // Optional per-element data (empty, or one entry per tet / per point).
+  std::vector<double> quality;                 ///< per tet: volume-length ratio, regular = 1
+  std::vector<std::uint32_t> source_triangle;  ///< per tet: index of its input triangle
+  std::vector<std::uint8_t> inner;             ///< per point: 1 for traced (inner) vertices
+  std::vector<double> thickness;               ///< per point: trace length, world units
+};
+
+}  // namespace vdb_shell

@@ -1,0 +1,339 @@
+// load_surface.cpp — closed 2-manifold checks on a polygon soup; see load_surface.h.
+#include "core/read/load_surface.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numeric>
+#include <tuple>
+#include <utility>
+
+#include "core/base/errors.h"
+
+namespace vdb_shell {
+namespace {
+
+/// Union-find over dense indices.
+class DisjointSets {
+ public:
+  explicit DisjointSets(std::size_t n) : parent_(n) {
+    std::iota(parent_.begin(), parent_.end(), std::size_t{0});
+  }
+  std::size_t find(std::size_t i) {
+    while (parent_[i] != i) i = parent_[i] = parent_[parent_[i]];
+    return i;
+  }
+  void unite(std::size_t a, std::size_t b) {
+    a = find(a);
+    b = find(b);
+    if (a != b) parent_[std::max(a, b)] = std::min(a, b);  // smallest index is the root
+  }
+
+ private:
+  std::vector<std::size_t> parent_;
+};
+
+std::string fmt_point(const Vec3d& p) {
+  char buf[96];
+  std::snprintf(buf, sizeof buf, "(%.6g, %.6g, %.6g)", p.x, p.y, p.z);
+  return buf;
+}
+
+/// Collects up to `max` examples of one rule and counts all of them.
+struct ProblemCollector {
+  SurfaceProblem problem;
+  std::size_t max;
+  std::vector<std::string> examples;
+  ProblemCollector(std::string rule, std::string remedy, std::size_t max_listed) : max(max_listed) {
+    problem.rule = std::move(rule);
+    problem.remedy = std::move(remedy);
+  }
+  void add(const std::string& example) {
+    if (examples.size() < max) examples.push_back(example);
+    ++problem.count;
+  }
+  void flush_into(std::vector<SurfaceProblem>& out) {
+    if (problem.count == 0) return;
+    for (std::size_t i = 0; i < examples.size(); ++i)
+      problem.first += (i ? "; " : "") + examples[i];
+    out.push_back(std::move(problem));
+  }
+};
+
+/// A triangle of the fan triangulation, with the polygon it came from.
+struct SoupTriangle {
+  Triangle v;
+  std::size_t polygon;
+};
+
+/// One side of an edge: the triangle and whether it runs lo -> hi.
+struct EdgeUse {
+  std::uint32_t lo, hi;
+  std::uint32_t tri;
+  bool forward;
+  bool operator<(const EdgeUse& o) const {
+    return std::tie(lo, hi, tri) < std::tie(o.lo, o.hi, o.tri);
+  }
+};
+
+std::vector<EdgeUse> edge_uses(const std::vector<SoupTriangle>& tris) {
+  std::vector<EdgeUse> uses;
+  uses.reserve(tris.size() * 3);
+  for (std::size_t t = 0; t < tris.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t a = tris[t].v[k], b = tris[t].v[(k + 1) % 3];
+      uses.push_back({std::min(a, b), std::max(a, b), static_cast<std::uint32_t>(t), a < b});
+    }
+  std::sort(uses.begin(), uses.end());
+  return uses;
+}
+
+std::vector<SoupTriangle> fan_triangulate(const PolygonSoup& soup) {
+  std::vector<SoupTriangle> tris;
+  tris.reserve(soup.polygons.size());
+  for (std::size_t p = 0; p < soup.polygons.size(); ++p) {
+    const auto& poly = soup.polygons[p];
+    for (std::size_t k = 1; k + 1 < poly.size(); ++k)
+      tris.push_back({{static_cast<std::uint32_t>(poly[0]), static_cast<std::uint32_t>(poly[k]),
+                       static_cast<std::uint32_t>(poly[k + 1])},
+                      p});
+  }
+  return tris;
+}
+
+}  // namespace
+
+std::vector<SurfaceProblem> find_surface_problems(const PolygonSoup& soup,
+                                                  const ValidationOptions& options) {
+  std::vector<SurfaceProblem> problems;
+  const std::size_t max = options.max_listed;
+  const auto& pts = soup.points;
+  const std::size_t nv = pts.size();
+
+  // Element-wise rules first: without valid indices and coordinates nothing else is meaningful.
+  ProblemCollector bad_coords("NaN/Inf coordinates",
+                              "the file holds invalid numbers; re-export the mesh", max);
+  for (std::size_t i = 0; i < nv; ++i)
+    if (!is_finite(pts[i])) bad_coords.add("vertex " + std::to_string(i) + " " + fmt_point(pts[i]));
+  ProblemCollector bad_index("out-of-range vertex indices",
+                             "the file is corrupt or truncated; re-export the mesh", max);
+  ProblemCollector short_poly("faces with fewer than 3 corners",
+                              "remove the points/lines from the file", max);
+  for (std::size_t p = 0; p < soup.polygons.size(); ++p) {
+    const auto& poly = soup.polygons[p];
+    if (poly.size() < 3)
+      short_poly.add("face " + std::to_string(p) + " has " + std::to_string(poly.size()));
+    for (std::int64_t idx : poly)
+      if (idx < 0 || static_cast<std::size_t>(idx) >= nv) {
+        bad_index.add("face " + std::to_string(p) + " uses vertex " + std::to_string(idx) +
+                      " of " + std::to_string(nv));
+        break;
+      }
+  }
+  const bool elements_ok =
+      bad_coords.problem.count == 0 && bad_index.problem.count == 0;
+  bad_coords.flush_into(problems);
+  bad_index.flush_into(problems);
+  short_poly.flush_into(problems);
+  if (!elements_ok) return problems;
+
+  const std::vector<SoupTriangle> tris = fan_triangulate(soup);
+  BBox box;
+  for (const Vec3d& p : pts) box.expand(p);
+  const double diag = box.diagonal();
+  const double min_twice_area = 2.0 * options.degenerate_area_fraction * diag * diag;
+
+  auto face_name = [&](const SoupTriangle& t) {
+    const bool tri_only = soup.polygons[t.polygon].size() == 3;
+    return (tri_only ? "face " : "polygon ") + std::to_string(t.polygon);
+  };
+  auto edge_name = [&](std::uint32_t a, std::uint32_t b) {
+    return "edge (" + std::to_string(a) + ", " + std::to_string(b) + ") at " + fmt_point(pts[a]) +
+           "-" + fmt_point(pts[b]);
+  };
+
+  // Degenerate and duplicate faces.
+  ProblemCollector degenerate("degenerate (zero-area) faces",
+                              "remove or collapse the zero-area faces", max);
+  std::vector<char> is_degenerate(tris.size(), 0);
+  for (std::size_t t = 0; t < tris.size(); ++t) {
+    const Triangle& v = tris[t].v;
+    const bool repeated = v[0] == v[1] || v[1] == v[2] || v[0] == v[2];
+    const double twice_area = repeated ? 0.0
+                               : norm(cross(pts[v[1]] - pts[v[0]], pts[v[2]] - pts[v[0]]));
+    if (repeated || twice_area <= min_twice_area) {
+      is_degenerate[t] = 1;
+      degenerate.add(face_name(tris[t]) + " (" + std::to_string(v[0]) + ", " +
+                     std::to_string(v[1]) + ", " + std::to_string(v[2]) + ") at " +
+                     fmt_point(pts[v[0]]));
+    }
+  }
+  ProblemCollector duplicate("duplicate faces", "remove the repeated faces", max);
+  {
+    std::vector<std::pair<Triangle, std::uint32_t>> sorted;
+    sorted.reserve(tris.size());
+    for (std::size_t t = 0; t < tris.size(); ++t) {
+      Triangle k = tris[t].v;
+      std::sort(k.begin(), k.end());
+      sorted.push_back({k, static_cast<std::uint32_t>(t)});
+    }
+    std::sort(sorted.begin(), sorted.end());
+    for (std::size_t i = 1; i < sorted.size(); ++i)
+      if (sorted[i].first == sorted[i - 1].first)
+        duplicate.add(face_name(tris[sorted[i].second]) + " repeats " +
+                      face_name(tris[sorted[i - 1].second]));
+  }
+
+  // Edge rules: every edge shared by exactly two faces that traverse it in opposite directions.
+  ProblemCollector boundary("boundary edges (the surface is not closed)",
+                            "close the holes or rebuild a watertight surface", max);
+  ProblemCollector nonmanifold_edge("non-manifold edges (more than two faces on an edge)",
+                                    "remove or separate the extra faces", max);
+  ProblemCollector orientation("inconsistently oriented faces",
+                               "orient all faces coherently (e.g. MeshLab's Re-Orient)", max);
+  const std::vector<EdgeUse> uses = edge_uses(tris);
+  DisjointSets corners(tris.size() * 3);  // fans around each vertex, for the vertex rule
+  auto corner_of = [&](std::uint32_t tri, std::uint32_t vertex) {
+    const Triangle& v = tris[tri].v;
+    const int k = v[0] == vertex ? 0 : (v[1] == vertex ? 1 : 2);
+    return static_cast<std::size_t>(tri) * 3 + static_cast<std::size_t>(k);
+  };
+  for (std::size_t i = 0; i < uses.size();) {
+    std::size_t j = i;
+    while (j < uses.size() && uses[j].lo == uses[i].lo && uses[j].hi == uses[i].hi) ++j;
+    const std::size_t count = j - i;
+    const std::uint32_t a = uses[i].lo, b = uses[i].hi;
+    if (a != b) {
+      if (count == 1) {
+        boundary.add(edge_name(a, b));
+      } else if (count > 2) {
+        nonmanifold_edge.add(edge_name(a, b) + " in " + std::to_string(count) + " faces");
+      } else {
+        if (uses[i].forward == uses[i + 1].forward)
+          orientation.add(face_name(tris[uses[i].tri]) + " and " +
+                          face_name(tris[uses[i + 1].tri]) + " along " + edge_name(a, b));
+        corners.unite(corner_of(uses[i].tri, a), corner_of(uses[i + 1].tri, a));
+        corners.unite(corner_of(uses[i].tri, b), corner_of(uses[i + 1].tri, b));
+      }
+    }
+    i = j;
+  }
+  // A vertex is manifold when its corners form one fan (one connected set through shared edges).
+  ProblemCollector nonmanifold_vertex("non-manifold vertices (faces meeting only at a vertex)",
+                                      "split the vertex or join the parts along an edge", max);
+  if (nonmanifold_edge.problem.count == 0) {
+    std::vector<std::size_t> first_root(nv, SIZE_MAX);
+    std::vector<char> reported(nv, 0);
+    for (std::size_t t = 0; t < tris.size(); ++t) {
+      if (is_degenerate[t]) continue;
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t v = tris[t].v[k];
+        const std::size_t root = corners.find(t * 3 + static_cast<std::size_t>(k));
+        if (first_root[v] == SIZE_MAX) {
+          first_root[v] = root;
+        } else if (first_root[v] != root && !reported[v]) {
+          reported[v] = 1;
+          nonmanifold_vertex.add("vertex " + std::to_string(v) + " at " + fmt_point(pts[v]));
+        }
+      }
+    }
+  }
+
+  boundary.flush_into(problems);
+  nonmanifold_edge.flush_into(problems);
+  nonmanifold_vertex.flush_into(problems);
+  degenerate.flush_into(problems);
+  duplicate.flush_into(problems);
+  orientation.flush_into(problems);
+  return problems;
+}
+
+SurfaceStats surface_stats(const SurfaceMesh& mesh) {
+  SurfaceStats s;
+  s.vertices = mesh.points.size();
+  s.faces = mesh.triangles.size();
+  s.bbox = bounding_box(mesh);
+  s.mean_edge_length = mean_edge_length(mesh);
+  s.enclosed_volume = signed_volume(mesh);
+
+  DisjointSets sets(mesh.points.size());
+  for (const Triangle& t : mesh.triangles) {
+    sets.unite(t[0], t[1]);
+    sets.unite(t[1], t[2]);
+  }
+  // Per component: V, E, F for the Euler characteristic.
+  std::vector<long long> comp_v(mesh.points.size(), 0), comp_e(mesh.points.size(), 0),
+      comp_f(mesh.points.size(), 0);
+  std::vector<char> used(mesh.points.size(), 0);
+  for (const Triangle& t : mesh.triangles) {
+    ++comp_f[sets.find(t[0])];
+    for (std::uint32_t v : t) used[v] = 1;
+  }
+  for (std::size_t v = 0; v < mesh.points.size(); ++v)
+    if (used[v]) ++comp_v[sets.find(v)];
+  const auto edges = unique_edges(mesh);
+  s.edges = edges.size();
+  for (const auto& e : edges) ++comp_e[sets.find(e.first)];
+  long long genus2 = 0;
+  for (std::size_t c = 0; c < mesh.points.size(); ++c) {
+    if (comp_f[c] == 0) continue;
+    ++s.components;
+    genus2 += 2 - (comp_v[c] - comp_e[c] + comp_f[c]);
+  }
+  s.genus = static_cast<int>(genus2 / 2);
+  return s;
+}
+
+LoadedSurface make_surface(const PolygonSoup& soup, const std::string& source,
+                           const ValidationOptions& options) {
+  const std::vector<SurfaceProblem> problems = find_surface_problems(soup, options);
+  if (!problems.empty()) {
+    std::string msg = source + ": not a closed 2-manifold triangle surface: ";
+    for (std::size_t i = 0; i < problems.size(); ++i) {
+      const SurfaceProblem& p = problems[i];
+      msg += (i ? " | " : "") + std::to_string(p.count) + " " + p.rule + ", first: " + p.first +
+             " — fix: " + p.remedy;
+    }
+    throw InputError(msg);
+  }
+
+  LoadedSurface out;
+  out.source = source;
+  out.polygons_read = soup.polygons.size();
+  for (const auto& poly : soup.polygons)
+    if (poly.size() > 3) ++out.triangulated_polygons;
+
+  // Keep only the vertices some face uses, in their original order.
+  std::vector<std::uint32_t> remap(soup.points.size(), UINT32_MAX);
+  for (const auto& poly : soup.polygons)
+    for (std::int64_t idx : poly) remap[static_cast<std::size_t>(idx)] = 0;
+  for (std::size_t i = 0; i < soup.points.size(); ++i)
+    if (remap[i] == 0) {
+      remap[i] = static_cast<std::uint32_t>(out.mesh.points.size());
+      out.mesh.points.push_back(soup.points[i]);
+    }
+  out.dropped_unused_vertices = soup.points.size() - out.mesh.points.size();
+  for (const SoupTriangle& t : fan_triangulate(soup))
+    out.mesh.triangles.push_back({remap[t.v[0]], remap[t.v[1]], remap[t.v[2]]});
+
+  if (signed_volume(out.mesh) < 0.0) {
+    for (Triangle& t : out.mesh.triangles) std::swap(t[1], t[2]);
+    out.flipped = true;
+    out.notices.push_back("the surface was oriented inward (negative enclosed volume); all faces "
+                          "were flipped to point outward");
+  }
+  if (out.triangulated_polygons)
+    out.notices.push_back(std::to_string(out.triangulated_polygons) +
+                          " polygons with more than three corners were split into triangles");
+  if (out.dropped_unused_vertices)
+    out.notices.push_back(std::to_string(out.dropped_unused_vertices) +
+                          " vertices used by no face were dropped");
+  out.stats = surface_stats(out.mesh);
+  return out;
+}
+
+LoadedSurface load_surface(const std::string& path, const ValidationOptions& options) {
+  return make_surface(read_polygon_soup(path), path, options);
+}
+
+}  // namespace vdb_shell

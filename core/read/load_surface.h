@@ -1,0 +1,76 @@
+// load_surface.h — turning a file's polygons into a closed, 2-manifold, outward triangle surface.
+//
+// Every rule of the design card is checked and reported by name with its first offending
+// elements (indices, 0-based, and positions): NaN/Inf coordinates, out-of-range indices,
+// polygons with fewer than three corners, degenerate (zero-area) and duplicate faces, boundary
+// edges, non-manifold edges and vertices, inconsistent orientation. Several components are
+// allowed. A surface whose enclosed volume is negative (normals pointing in) is flipped and a
+// notice says so. Vertices no face uses are dropped with a notice.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "core/read/polygon_soup.h"
+#include "core/base/surface_mesh.h"
+
+namespace vdb_shell {
+
+struct ValidationOptions {
+  /// How many offending elements each problem lists in the message.
+  std::size_t max_listed = 3;
+  /// Faces whose area is at most this fraction of the squared bounding-box diagonal count as
+  /// degenerate (zero-area).
+  double degenerate_area_fraction = 1e-14;
+};
+
+/// Facts about a valid surface (what `vdb_shell INPUT` prints).
+struct SurfaceStats {
+  std::size_t vertices = 0;
+  std::size_t faces = 0;
+  std::size_t edges = 0;
+  std::size_t components = 0;
+  int genus = 0;                 ///< sum over components of (2 - V + E - F) / 2
+  BBox bbox;                     ///< world units
+  double mean_edge_length = 0;   ///< world units
+  double enclosed_volume = 0;    ///< world units cubed, positive once oriented outward
+};
+
+/// A validated surface and what was done to it on the way.
+struct LoadedSurface {
+  SurfaceMesh mesh;
+  SurfaceStats stats;
+  std::string source;                     ///< the name messages use (make_surface()'s source)
+  std::size_t polygons_read = 0;          ///< faces in the file before triangulation
+  std::size_t triangulated_polygons = 0;  ///< polygons with more than three corners
+  std::size_t dropped_unused_vertices = 0;
+  bool flipped = false;                   ///< true when the input was oriented inward
+  std::vector<std::string> notices;       ///< one sentence each, for the CLI to print
+};
+
+/// One broken rule: a short name ("boundary edges") and its first offending elements.
+struct SurfaceProblem {
+  std::string rule;
+  std::size_t count = 0;
+  std::string first;  ///< e.g. "edge (3, 7) at (0, 0, 1)-(1, 0, 1)"
+  std::string remedy;
+};
+
+/// Lists every broken rule of `soup` (empty when it is a valid closed 2-manifold surface).
+std::vector<SurfaceProblem> find_surface_problems(const PolygonSoup& soup,
+                                                  const ValidationOptions& options = {});
+
+/// Validates `soup` and returns it as an outward triangle surface.
+/// \param source  name used in messages (usually the file path)
+/// \throw InputError naming `source`, every broken rule and its first offending elements.
+LoadedSurface make_surface(const PolygonSoup& soup, const std::string& source,
+                           const ValidationOptions& options = {});
+
+/// read_polygon_soup() followed by make_surface().
+LoadedSurface load_surface(const std::string& path, const ValidationOptions& options = {});
+
+/// Counts, genus, bounds and volume of a triangle surface (closed meshes give exact genus).
+SurfaceStats surface_stats(const SurfaceMesh& mesh);
+
+}  // namespace vdb_shell

@@ -1,0 +1,279 @@
+// polygon_soup.cpp — OpenMesh-backed reader that keeps the file's polygons as written.
+#include "core/read/polygon_soup.h"
+
+#include <OpenMesh/Core/IO/IOManager.hh>
+#include <OpenMesh/Core/IO/MeshIO.hh>
+#include <OpenMesh/Core/IO/importer/BaseImporter.hh>
+#include <OpenMesh/Core/System/omstream.hh>
+
+#include <algorithm>
+#include <cctype>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+
+#include "core/base/errors.h"
+
+namespace vdb_shell {
+namespace {
+
+namespace om = OpenMesh;
+using om::VertexHandle;
+using om::FaceHandle;
+using om::HalfedgeHandle;
+using om::EdgeHandle;
+
+/// BaseImporter that records positions and polygons and ignores every attribute.
+class SoupImporter final : public om::IO::BaseImporter {
+ public:
+  explicit SoupImporter(PolygonSoup& soup) : soup_(soup) {}
+
+  VertexHandle add_vertex(const om::Vec3f& p) override {
+    return add_vertex(om::Vec3d(p[0], p[1], p[2]));
+  }
+  VertexHandle add_vertex(const om::Vec3d& p) override {
+    soup_.points.push_back({p[0], p[1], p[2]});
+    return VertexHandle(static_cast<int>(soup_.points.size()) - 1);
+  }
+  VertexHandle add_vertex() override { return add_vertex(om::Vec3d(0, 0, 0)); }
+  FaceHandle add_face(const VHandles& indices) override {
+    std::vector<std::int64_t> poly;
+    poly.reserve(indices.size());
+    for (const VertexHandle& vh : indices) poly.push_back(vh.idx());
+    soup_.polygons.push_back(std::move(poly));
+    return FaceHandle(static_cast<int>(soup_.polygons.size()) - 1);
+  }
+  void set_point(VertexHandle vh, const om::Vec3f& p) override {
+    if (vh.is_valid() && static_cast<std::size_t>(vh.idx()) < soup_.points.size())
+      soup_.points[static_cast<std::size_t>(vh.idx())] = {p[0], p[1], p[2]};
+  }
+  size_t n_vertices() const override { return soup_.points.size(); }
+  size_t n_faces() const override { return soup_.polygons.size(); }
+  size_t n_edges() const override { return 0; }
+
+  // Everything below carries attributes vdb_shell does not use.
+  HalfedgeHandle add_edge(VertexHandle, VertexHandle) override { return HalfedgeHandle(); }
+  FaceHandle add_face(HalfedgeHandle) override { return FaceHandle(); }
+  void add_face_texcoords(FaceHandle, VertexHandle, const std::vector<om::Vec2f>&) override {}
+  void add_face_texcoords(FaceHandle, VertexHandle, const std::vector<om::Vec3f>&) override {}
+  void set_face_texindex(FaceHandle, int) override {}
+  void set_halfedge(VertexHandle, HalfedgeHandle) override {}
+  void set_normal(VertexHandle, const om::Vec3f&) override {}
+  void set_normal(VertexHandle, const om::Vec3d&) override {}
+  void set_color(VertexHandle, const om::Vec3uc&) override {}
+  void set_color(VertexHandle, const om::Vec4uc&) override {}
+  void set_color(VertexHandle, const om::Vec3f&) override {}
+  void set_color(VertexHandle, const om::Vec4f&) override {}
+  void set_texcoord(VertexHandle, const om::Vec2f&) override {}
+  void set_status(VertexHandle, const om::Attributes::StatusInfo&) override {}
+  void set_next(HalfedgeHandle, HalfedgeHandle) override {}
+  void set_face(HalfedgeHandle, FaceHandle) override {}
+  void request_face_texcoords2D() override {}
+  void set_texcoord(HalfedgeHandle, const om::Vec2f&) override {}
+  void set_texcoord(VertexHandle, const om::Vec3f&) override {}
+  void set_texcoord(HalfedgeHandle, const om::Vec3f&) override {}
+  void set_status(HalfedgeHandle, const om::Attributes::StatusInfo&) override {}
+  void set_color(EdgeHandle, const om::Vec3uc&) override {}
+  void set_color(EdgeHandle, const om::Vec4uc&) override {}
+  void set_color(EdgeHandle, const om::Vec3f&) override {}
+  void set_color(EdgeHandle, const om::Vec4f&) override {}
+  void set_status(EdgeHandle, const om::Attributes::StatusInfo&) override {}
+  void set_normal(FaceHandle, const om::Vec3f&) override {}
+  void set_normal(FaceHandle, const om::Vec3d&) override {}
+  void set_color(FaceHandle, const om::Vec3uc&) override {}
+  void set_color(FaceHandle, const om::Vec4uc&) override {}
+  void set_color(FaceHandle, const om::Vec3f&) override {}
+  void set_color(FaceHandle, const om::Vec4f&) override {}
+  void set_status(FaceHandle, const om::Attributes::StatusInfo&) override {}
+  void add_texture_information(int, std::string) override {}
+
+ private:
+  PolygonSoup& soup_;
+};
+
+/// Routes OpenMesh's diagnostic streams into a string for the lifetime of the object.
+class CaptureOpenMeshLog {
+ public:
+  CaptureOpenMeshLog() {
+    ::omerr().disconnect(std::cerr);
+    ::omlog().disconnect(std::cerr);
+    ::omout().disconnect(std::cout);
+    ::omerr().connect(text_);
+  }
+  ~CaptureOpenMeshLog() {
+    ::omerr().disconnect(text_);
+    ::omerr().connect(std::cerr);
+  }
+  std::string text() {
+    ::omerr().flush();
+    std::string s = text_.str();
+    std::replace(s.begin(), s.end(), '\n', ' ');
+    while (!s.empty() && s.back() == ' ') s.pop_back();
+    return s;
+  }
+
+ private:
+  std::ostringstream text_;
+};
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return s;
+}
+
+/// A binary STL must be exactly 84 + 50 * n bytes; OpenMesh would otherwise misread a
+/// truncated one as ASCII. Returns an empty string when the file looks sound.
+std::string check_stl_size(const std::string& path, std::uintmax_t size) {
+  std::ifstream in(path, std::ios::binary);
+  char head[84] = {};
+  in.read(head, sizeof head);
+  const std::streamsize got = in.gcount();
+  const bool ascii_start = got >= 5 && lower(std::string(head, 5)) == "solid";
+  // An ASCII STL (or a binary one whose header starts with "solid"): OpenMesh tells them apart
+  // and its parser reports its own errors.
+  if (ascii_start) return {};
+  if (got < 84)
+    return "binary STL is truncated: " + std::to_string(size) +
+           " bytes, less than the 84-byte header";
+  std::uint32_t n = 0;
+  std::memcpy(&n, head + 80, 4);
+  const std::uintmax_t want = 84 + 50ull * n;
+  if (size != want)
+    return "binary STL is truncated or corrupt: its header announces " + std::to_string(n) +
+           " triangles (" + std::to_string(want) + " bytes) but the file has " +
+           std::to_string(size) + " bytes";
+  return {};
+}
+
+/// Vertex positions of an ASCII OBJ or OFF file, parsed in double precision (OpenMesh's readers
+/// store floats and skip coordinates they cannot parse, such as "nan").
+struct AsciiVertices {
+  std::vector<Vec3d> points;
+  std::vector<std::string> bad;  ///< "vertex 3 (line 5): 'nan 0 1'"
+  bool parsed = false;           ///< false when the format is not one we scan
+};
+
+bool parse_xyz(const std::string& text, Vec3d& p) {
+  const char* s = text.c_str();
+  for (int k = 0; k < 3; ++k) {
+    char* end = nullptr;
+    const double v = std::strtod(s, &end);
+    if (end == s) return false;
+    p[k] = v;
+    s = end;
+  }
+  return is_finite(p);
+}
+
+AsciiVertices scan_ascii_vertices(const std::string& path, const std::string& ext) {
+  AsciiVertices out;
+  std::ifstream in(path);
+  std::string line;
+  std::size_t line_no = 0;
+  auto add = [&](const std::string& coords) {
+    Vec3d p;
+    if (!parse_xyz(coords, p) && out.bad.size() < 3)
+      out.bad.push_back("vertex " + std::to_string(out.points.size()) + " (line " +
+                        std::to_string(line_no) + "): '" + coords.substr(0, 60) + "'");
+    out.points.push_back(p);
+  };
+  if (ext == ".obj") {
+    while (std::getline(in, line)) {
+      ++line_no;
+      std::size_t i = line.find_first_not_of(" \t");
+      if (i != std::string::npos && line.compare(i, 2, "v ") == 0) add(line.substr(i + 2));
+      if (i != std::string::npos && line.compare(i, 2, "v\t") == 0) add(line.substr(i + 2));
+    }
+    out.parsed = true;
+    return out;
+  }
+  // OFF: header keyword (OFF, COFF, NOFF, ...), counts, then one vertex per line.
+  std::vector<std::string> header;
+  long long nv = -1;
+  while (nv < 0 && std::getline(in, line)) {
+    ++line_no;
+    const std::size_t hash = line.find('#');
+    std::istringstream words(line.substr(0, hash));
+    std::string w;
+    while (words >> w) header.push_back(w);
+    if (!header.empty() && header[0].find("OFF") == std::string::npos) return out;
+    if (!header.empty() && line.find("BINARY") != std::string::npos) return out;
+    if (header.size() >= 4) nv = std::atoll(header[1].c_str());
+  }
+  while (nv > 0 && static_cast<long long>(out.points.size()) < nv && std::getline(in, line)) {
+    ++line_no;
+    const std::size_t first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#') continue;
+    add(line.substr(first));
+  }
+  out.parsed = true;
+  return out;
+}
+
+}  // namespace
+
+const std::vector<std::string>& supported_surface_extensions() {
+  static const std::vector<std::string> exts = {".obj", ".off", ".ply", ".stl"};
+  return exts;
+}
+
+PolygonSoup read_polygon_soup(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::exists(path, ec))
+    throw InputError(path + ": no such file; check the path");
+  if (fs::is_directory(path, ec))
+    throw InputError(path + ": is a directory, not a surface mesh file");
+  const std::string ext = lower(fs::path(path).extension().string());
+  const auto& exts = supported_surface_extensions();
+  if (std::find(exts.begin(), exts.end(), ext) == exts.end())
+    throw InputError(path + ": unknown surface format '" + ext +
+                     "'; use .obj, .off, .ply or .stl");
+  const std::uintmax_t size = fs::file_size(path, ec);
+  if (ec) throw InputError(path + ": cannot read (" + ec.message() + ")");
+  if (size == 0) throw InputError(path + ": the file is empty (0 bytes)");
+  {
+    std::ifstream probe(path, std::ios::binary);
+    if (!probe) throw InputError(path + ": cannot open for reading; check its permissions");
+  }
+  if (ext == ".stl") {
+    const std::string problem = check_stl_size(path, size);
+    if (!problem.empty()) throw InputError(path + ": " + problem);
+  }
+
+  PolygonSoup soup;
+  SoupImporter importer(soup);
+  om::IO::Options opt;
+  bool ok = false;
+  std::string log;
+  {
+    CaptureOpenMeshLog capture;
+    ok = om::IO::IOManager().read(path, importer, opt);
+    log = capture.text();
+  }
+  const std::string detail = log.empty() ? "" : " (OpenMesh: " + log + ")";
+  if (!ok)
+    throw InputError(path + ": not a readable " + ext.substr(1) + " file" + detail +
+                     "; check that it is a complete, uncorrupted mesh file");
+  if (ext == ".obj" || ext == ".off") {
+    // Keep the file's double-precision coordinates and name unparsable ones.
+    AsciiVertices exact = scan_ascii_vertices(path, ext);
+    if (!exact.bad.empty()) {
+      std::string list;
+      for (const std::string& b : exact.bad) list += (list.empty() ? "" : "; ") + b;
+      throw InputError(path + ": NaN/Inf or unreadable vertex coordinates, first: " + list +
+                       " — fix: re-export the mesh with finite coordinates");
+    }
+    if (exact.parsed && exact.points.size() == soup.points.size()) soup.points = exact.points;
+  }
+  if (soup.polygons.empty())
+    throw InputError(path + ": holds no faces (" + std::to_string(soup.points.size()) +
+                     " vertices)" + detail + "; vdb_shell needs a closed triangle surface");
+  return soup;
+}
+
+}  // namespace vdb_shell

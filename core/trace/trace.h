@@ -1,0 +1,98 @@
+// trace.h — vertex classification and path tracing (paper §2, Fig. 6; DESIGN steps 3-5).
+//
+// Every surface vertex p is traced inward, q <- q - step * g with g = grad(phi)(q) normalised
+// only when |g| > 1 (eq. 1, 2, 4, 5), or with a higher-order integrator of the same field.
+// A trace stops at
+//   * a critical point: |g|^2 < c |g(p)|^2 (eq. 4), or g reversing direction (the point was
+//     passed);
+//   * the medial surface, for planar vertices only: flux(q) > rho (eq. 8), at the sample where
+//     the flux peaks (the flux rises over ~2 voxels before the surface; its peak is on it);
+//   * a safety cap on the number of steps.
+// Merges (criterion 1) are then resolved order-independently: each trace ends at its first
+// sample (by arc length) that lies within the point size of a sample of another trace, where
+// traces that *started* within the point size of each other, or that run within `merge_angle` of
+// the same direction, never merge (they are neighbours running side by side, not a junction), and
+// a trace does not merge into the last two point sizes of another (traces arriving together at a
+// critical point end there and are welded, they do not stop short of it).
+// Non-planar traces are resolved first; planar traces then merge with the (already ended)
+// non-planar ones and with each other (paper Fig. 3). Every loop is parallel and each trace
+// writes only its own slot: the result is identical for any thread count.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/trace/field_sampler.h"
+#include "core/trace/point_index.h"
+#include "core/base/run_control.h"
+#include "core/base/surface_mesh.h"
+
+namespace vdb_shell {
+
+enum class StopReason : std::uint8_t { kCritical = 0, kMerge = 1, kFlux = 2, kCap = 3 };
+const char* to_string(StopReason r);
+
+enum class Integrator : std::uint8_t { kEuler, kRk2, kRk4 };
+const char* to_string(Integrator i);
+/// Parses "euler", "rk2", "rk4"; throws InputError otherwise.
+Integrator parse_integrator(const std::string& name);
+
+/// What the user asked for (0 / negative = the documented default derived from the voxel size).
+struct TraceOptions {
+  double step = 0.0;             ///< world units; 0: half the voxel size (eq. 2)
+  double critical = 1e-3;        ///< c of eq. 4 (dimensionless)
+  double point_size = 0.0;       ///< world units; 0: one voxel diagonal (sqrt(3) voxels)
+  double flux_threshold = 0.1;   ///< rho of eq. 8, on the average outward flux in [-1, 1]
+  double planar_angle = 5.0;     ///< degrees; a vertex is planar when all incident face
+                                 ///< normals lie within this angle of each other
+  double merge_angle = 60.0;     ///< degrees; traces meeting at a smaller angle do not merge
+  Integrator integrator = Integrator::kRk2;
+  int max_steps = 0;             ///< 0: 4 * (bbox diagonal / step) + 16
+};
+
+/// Step, point size and cap after defaults are applied — one pure function computes them.
+struct TraceParameters {
+  double step = 0;        ///< world units
+  double point_size = 0;  ///< world units
+  int max_steps = 0;
+  double cos_planar = 1;  ///< cosine of planar_angle
+  double cos_merge = 1;   ///< cosine of merge_angle
+};
+/// \throw InputError for non-positive or non-finite values the user gave explicitly.
+TraceParameters derive_trace_parameters(const TraceOptions& options, double voxel_size,
+                                        const BBox& bounds);
+
+/// 1 for planar vertices, 0 for non-planar (sharp edges, corners, tips, curved regions).
+std::vector<std::uint8_t> classify_vertices(const SurfaceMesh& mesh, double planar_angle_deg);
+
+/// All traces, one per surface vertex, as compressed rows of samples.
+struct TraceResult {
+  std::vector<std::uint32_t> offsets;  ///< trace v's samples are [offsets[v], offsets[v+1])
+  std::vector<Vec3d> samples;          ///< sample 0 of each trace is the surface vertex
+  std::vector<double> arc_length;      ///< per sample, world units (eq. 5)
+  std::vector<std::uint32_t> end;      ///< per trace: index of its end sample within the trace
+  std::vector<StopReason> stop;        ///< per trace
+  std::vector<std::uint8_t> planar;    ///< per trace
+  std::vector<std::int64_t> merged_with;  ///< per trace: the other vertex, or -1
+
+  TraceParameters parameters;
+  std::size_t count[4] = {0, 0, 0, 0};  ///< traces per StopReason
+  double seconds_tracing = 0;
+  double seconds_merging = 0;
+
+  std::size_t num_traces() const { return end.size(); }
+  std::size_t num_samples(std::size_t v) const { return offsets[v + 1] - offsets[v]; }
+  const Vec3d& sample(std::size_t v, std::size_t i) const { return samples[offsets[v] + i]; }
+  const Vec3d& end_point(std::size_t v) const { return sample(v, end[v]); }
+  double end_arc(std::size_t v) const { return arc_length[offsets[v] + end[v]]; }
+};
+
+/// Traces every vertex of `mesh` through `fields` and resolves merges. Reports the fraction of
+/// traces done to `monitor` (tracing is 80% of the stage, merging the rest) and checks it.
+TraceResult trace_paths(const SurfaceMesh& mesh, const FieldSampler& fields,
+                        const TraceOptions& options,
+                        const PointIndexFactory& make_index = make_hash_point_index,
+                        const StageMonitor& monitor = StageMonitor());
+
+}  // namespace vdb_shell

@@ -1,0 +1,608 @@
+// search.cpp — moving inner vertices back along their traces until the shell is valid; see
+// search.h for the method and why it terminates.
+#include "core/validity/search.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "core/assemble/quality.h"
+
+namespace vdb_shell {
+namespace {
+
+/// Smallest -n.d over the unit face normals `normals` (> 0: d points inward for every face).
+double inward_margin(const std::vector<Vec3d>& normals, const Vec3d& d) {
+  double m = std::numeric_limits<double>::infinity();
+  for (const Vec3d& nf : normals) m = std::min(m, -dot(nf, d));
+  return m;
+}
+
+/// The unit direction that (approximately) maximises inward_margin, by projected subgradient
+/// steps from `start`; deterministic.
+Vec3d most_inward_direction(const std::vector<Vec3d>& normals, Vec3d start) {
+  Vec3d d = normalized(start), best = d;
+  double best_margin = inward_margin(normals, d);
+  for (int k = 0; k < 200 && !normals.empty(); ++k) {
+    const Vec3d* worst = &normals[0];
+    for (const Vec3d& nf : normals)
+      if (-dot(nf, d) < -dot(*worst, d)) worst = &nf;
+    d = normalized(d - *worst * (0.5 / (k + 1.0)));
+    const double m = inward_margin(normals, d);
+    if (m > best_margin) {
+      best_margin = m;
+      best = d;
+    }
+  }
+  return best;
+}
+
+/// First directions with a smaller inward margin (sine of the angle to the nearest incident
+/// face plane) are bent towards the most inward direction.
+constexpr double kMinMargin = 0.1;
+
+/// Lists of indices per key in one array: key k's are items[start[k] .. start[k + 1]).
+struct Lists {
+  std::vector<std::uint32_t> start, items;
+  struct Range {
+    const std::uint32_t *b, *e;
+    const std::uint32_t* begin() const { return b; }
+    const std::uint32_t* end() const { return e; }
+  };
+  Range operator[](std::uint32_t k) const {
+    return {items.data() + start[k], items.data() + start[k + 1]};
+  }
+  /// From pairs(emit), which calls emit(key, item) for every item, in the order to keep.
+  template <class Pairs>
+  void build(std::size_t keys, const Pairs& pairs) {
+    start.assign(keys + 1, 0);
+    pairs([&](std::uint32_t k, std::uint32_t) { ++start[k + 1]; });
+    for (std::size_t k = 0; k < keys; ++k) start[k + 1] += start[k];
+    items.resize(start.back());
+    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+    pairs([&](std::uint32_t k, std::uint32_t item) { items[fill[k]++] = item; });
+  }
+};
+
+/// Per-vertex state of the search.
+struct State {
+  std::vector<double> t;        ///< current arc length; 0: on the surface (folded vertices)
+  std::vector<char> welded;     ///< still sharing its start weld group's point
+};
+
+class ShellSearch {
+ public:
+  ShellSearch(const SurfaceMesh& surface, const TraceResult& traces, const InnerVertices& start,
+              const ValidityOptions& options, const StageMonitor& monitor)
+      : surface_(surface), traces_(traces), start_(start), monitor_(monitor) {
+    const std::size_t n = surface.points.size();
+    full_.resize(n);
+    floor_.assign(n, std::numeric_limits<double>::infinity());
+    fallback_.resize(n);
+    cached_t_.assign(n, -1.0);
+    drops_.assign(n, 0);
+    cached_position_.resize(n);
+    std::vector<Vec3d> normal(n);
+    for (std::size_t f = 0; f < surface.triangles.size(); ++f) {
+      const Triangle& tri = surface.triangles[f];
+      const Vec3d nf = face_normal_area(surface, f);
+      for (int k = 0; k < 3; ++k) {
+        normal[tri[k]] += nf;
+        const double l = distance(surface.points[tri[k]], surface.points[tri[(k + 1) % 3]]);
+        floor_[tri[k]] = std::min(floor_[tri[k]], l);
+        floor_[tri[(k + 1) % 3]] = std::min(floor_[tri[(k + 1) % 3]], l);
+      }
+    }
+    groups_.build(start.input.inner_points.size(), [&](const auto& emit) {
+      for (std::uint32_t v = 0; v < n; ++v) emit(start.input.inner_id[v], v);
+    });
+    faces_.build(n, [&](const auto& emit) {
+      for (std::uint32_t f = 0; f < surface.triangles.size(); ++f)
+        for (std::uint32_t v : surface.triangles[f]) emit(v, f);
+    });
+    std::vector<std::vector<Vec3d>> face_normals(n);
+    for (std::size_t f = 0; f < surface.triangles.size(); ++f)
+      for (std::uint32_t v : surface.triangles[f])
+        face_normals[v].push_back(normalized(face_normal_area(surface, f)));
+    correction_.assign(n, Vec3d{});
+    for (std::size_t v = 0; v < n; ++v) {
+      floor_[v] *= options.floor_fraction;
+      full_[v] = std::max(start.arc[v], floor_[v]);
+      // Beyond the trace's end (only for traces shorter than the floor): continue straight
+      // along its first step, or inward along the vertex normal for a trace that never moved.
+      fallback_[v] = traces.end[v] > 0 ? normalized(traces.sample(v, 1) - traces.sample(v, 0))
+                                       : -normalized(normal[v]);
+      // The first direction must point inward for every incident face, with a margin, or the
+      // thinnest shell already folds: bend the start of such a trace (within the floor depth)
+      // into the most inward direction.
+      const Vec3d first = fallback_[v];
+      const double margin = inward_margin(face_normals[v], first);
+      if (margin >= kMinMargin) continue;
+      const Vec3d safe = most_inward_direction(face_normals[v], -normalized(normal[v]));
+      if (inward_margin(face_normals[v], safe) > margin) correction_[v] = safe - first;
+      if (std::max(margin, inward_margin(face_normals[v], safe)) <= 0.0)
+        folded_.push_back(static_cast<std::uint32_t>(v));
+    }
+    // Folded vertices stay on the surface. A face with three folded corners keeps a prism as one
+    // tet to a cap point of its own, at the floor depth below its centroid.
+    std::vector<char> folded(n, 0);
+    for (std::uint32_t v : folded_) folded[v] = 1;
+    for (std::uint32_t f = 0; f < surface.triangles.size(); ++f) {
+      const Triangle& tri = surface.triangles[f];
+      if (!folded[tri[0]] || !folded[tri[1]] || !folded[tri[2]]) continue;
+      const std::array<Vec3d, 3> p = {surface.points[tri[0]], surface.points[tri[1]],
+                                      surface.points[tri[2]]};
+      const double edge =
+          std::min({distance(p[0], p[1]), distance(p[1], p[2]), distance(p[2], p[0])});
+      caps_.cap_faces.push_back(f);
+      caps_.cap_points.push_back((p[0] + p[1] + p[2]) / 3.0 -
+                                 normalized(face_normal_area(surface, f)) *
+                                     (options.floor_fraction * edge));
+    }
+  }
+
+  /// Vertices whose incident faces admit no common inward direction (none found), in order.
+  const std::vector<std::uint32_t>& folded() const { return folded_; }
+  /// Faces with three folded corners and their cap points (ShellInput::cap_faces).
+  std::size_t caps() const { return caps_.cap_faces.size(); }
+
+  const std::vector<double>& full() const { return full_; }
+  const std::vector<double>& floor() const { return floor_; }
+
+  State initial() {
+    State s;
+    s.t = full_;
+    s.welded.resize(full_.size());
+    for (std::uint32_t v = 0; v < full_.size(); ++v) {
+      const auto group = groups_[start_.input.inner_id[v]];
+      s.welded[v] = group.end() - group.begin() > 1 && start_.arc[v] >= floor_[v];
+    }
+    for (std::uint32_t v : folded_) {
+      s.t[v] = 0;
+      s.welded[v] = 0;
+    }
+    // A weld group is one slot, ordered by its smallest welded member, until it unwelds whole.
+    // Its depth, the deepest welded member's, holds as long: welded members do not move.
+    group_key_.assign(groups_.start.size() - 1, UINT32_MAX);
+    group_depth_.assign(groups_.start.size() - 1, 0.0);
+    for (std::uint32_t v = static_cast<std::uint32_t>(full_.size()); v-- > 0;)
+      if (s.welded[v]) {
+        const std::uint32_t g = start_.input.inner_id[v];
+        group_key_[g] = v;
+        group_depth_[g] = std::max(group_depth_[g], s.t[v]);
+      }
+    return s;
+  }
+
+  /// Prism f as assemble_shell() would build it from build(s): the same ids (their order is all
+  /// the split depends on) and positions, and its tets.
+  struct LocalPrism {
+    std::uint32_t face = 0;
+    std::array<std::uint32_t, 6> ids{};
+    std::array<Vec3d, 6> at;
+    PrismTets tets;
+    std::array<Vec3d, 4> corners(int i) const {
+      std::array<Vec3d, 4> p;
+      for (int c = 0; c < 4; ++c)
+        p[c] = at[std::find(ids.begin(), ids.end(), tets.tets[i][c]) - ids.begin()];
+      return p;
+    }
+  };
+  LocalPrism prism(const State& s, std::uint32_t f) const {
+    const auto n = static_cast<std::uint32_t>(full_.size());
+    const Triangle& tri = surface_.triangles[f];
+    LocalPrism p;
+    p.face = f;
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t v = tri[k];
+      p.ids[k] = v;
+      p.at[k] = surface_.points[v];
+      if (s.t[v] == 0) {
+        p.ids[k + 3] = v;
+        p.at[k + 3] = p.at[k];
+      } else if (s.welded[v]) {
+        const std::uint32_t g = start_.input.inner_id[v];
+        p.ids[k + 3] = n + group_key_[g];
+        p.at[k + 3] = start_.input.inner_points[g];
+      } else {
+        p.ids[k + 3] = n + v;
+        p.at[k + 3] = cached_position(v, s.t[v]);
+      }
+    }
+    const auto cap = std::lower_bound(caps_.cap_faces.begin(), caps_.cap_faces.end(), f);
+    if (cap != caps_.cap_faces.end() && *cap == f) {  // as assemble_shell(): one tet, no mover
+      p.ids[3] = UINT32_MAX;
+      p.at[3] = caps_.cap_points[static_cast<std::size_t>(cap - caps_.cap_faces.begin())];
+      p.tets.count = 1;
+      p.tets.tets[0] = {p.ids[0], p.ids[1], p.ids[3], p.ids[2]};
+      return p;
+    }
+    p.tets = split_prism(p.ids);
+    return p;
+  }
+
+  /// The surface vertex owning the deepest movable inner corner of tet i of `p` (as the rounds
+  /// choose it), or UINT32_MAX when every inner corner is at its floor.
+  std::uint32_t deepest_corner(const State& s, const LocalPrism& p, int i) const {
+    const auto n = static_cast<std::uint32_t>(full_.size());
+    const Triangle& tri = surface_.triangles[p.face];
+    std::uint32_t best = UINT32_MAX;
+    double best_depth = 0;
+    for (const std::uint32_t id : p.tets.tets[i]) {
+      if (id < n) continue;
+      const auto corner = std::find(p.ids.begin() + 3, p.ids.end(), id) - p.ids.begin() - 3;
+      const std::uint32_t v = tri[corner];
+      const double d = s.welded[v] ? group_depth_[start_.input.inner_id[v]]
+                                   : (s.t[v] > floor_[v] ? s.t[v] : 0.0);
+      if (d > best_depth) {
+        best_depth = d;
+        best = v;
+      }
+    }
+    return best;
+  }
+
+  /// Moves v's inner vertex back one step, as a round does: a welded group leaves its weld
+  /// whole, anything else goes to max(floor, shrink * t). Calls moved(u) for every vertex moved;
+  /// returns how many left their weld.
+  template <class Moved>
+  std::size_t step_back(State& s, std::uint32_t v, double shrink, const Moved& moved) const {
+    if (!s.welded[v]) {
+      s.t[v] = std::max(floor_[v], s.t[v] * shrink);
+      moved(v);
+      return 0;
+    }
+    std::size_t unwelded = 0;
+    for (const std::uint32_t u : groups_[start_.input.inner_id[v]]) {
+      if (!s.welded[u]) continue;
+      s.welded[u] = 0;
+      ++unwelded;
+      moved(u);
+    }
+    return unwelded;
+  }
+
+  /// Steps back, as a round does for an inverted or flat tet (its deepest movable inner corner),
+  /// until every tet of the prisms in `queue`, and of the prisms around every vertex moved on
+  /// the way, is positive with a quality of at least `min_quality`, or has all its inner
+  /// corners at their floor (left to the checks; a sliver there is no violation).
+  /// Local and serial. Marks the moved vertices in `lowered`; returns how many left their weld.
+  std::size_t settle_volumes(State& s, std::vector<std::uint32_t> queue, double shrink,
+                             double zero_volume_tolerance, double min_quality,
+                             std::vector<char>& lowered) const {
+    std::vector<char> queued(surface_.triangles.size(), 0);
+    for (std::uint32_t f : queue) queued[f] = 1;
+    auto moved = [&](std::uint32_t v) {
+      lowered[v] = 1;
+      for (const std::uint32_t f : faces_[v])
+        if (!queued[f]) {
+          queued[f] = 1;
+          queue.push_back(f);
+        }
+    };
+    std::size_t unwelded = 0;
+    for (std::size_t head = 0; head < queue.size(); ++head) {
+      if ((head & 1023) == 1023) monitor_.check();
+      const std::uint32_t f = queue[head];
+      queued[f] = 0;
+      const LocalPrism p = prism(s, f);
+      for (int i = 0; i < p.tets.count; ++i) {
+        const std::array<Vec3d, 4> c = p.corners(i);
+        if (tet_volume_class(c, zero_volume_tolerance) == TetVolume::kPositive &&
+            !(tet_quality(c[0], c[1], c[2], c[3]) < min_quality))
+          continue;
+        const std::uint32_t v = deepest_corner(s, p, i);
+        if (v == UINT32_MAX) continue;  // at the floor: left to the checks
+        unwelded += step_back(s, v, shrink, moved);
+        break;  // the prism is queued again
+      }
+    }
+    return unwelded;
+  }
+
+  /// Steps back, for every pair of overlapping prisms (f, g) in `pairs`, the deepest movable
+  /// inner corner of each of their overlapping tets until the two no longer overlap or only
+  /// corners at the floor remain, settling the volumes around every move. Marks the moved
+  /// vertices in `lowered`; returns how many left their weld.
+  std::size_t settle_overlaps(State& s, const std::vector<std::array<std::uint32_t, 2>>& pairs,
+                              double shrink, const ShellCheckOptions& options,
+                              double min_quality, std::vector<char>& lowered) const {
+    std::size_t unwelded = 0;
+    std::vector<std::uint32_t> step, around, moved;
+    for (const auto& [f, g] : pairs) {
+      monitor_.check();
+      for (;;) {
+        const LocalPrism a = prism(s, f), b = prism(s, g);
+        step.clear();
+        for (int i = 0; i < a.tets.count; ++i)
+          for (int j = f == g ? i + 1 : 0; j < b.tets.count; ++j) {
+            if (!tets_overlap(a.corners(i), b.corners(j), options)) continue;
+            step.push_back(deepest_corner(s, a, i));
+            step.push_back(deepest_corner(s, b, j));
+          }
+        std::sort(step.begin(), step.end());
+        step.erase(std::unique(step.begin(), step.end()), step.end());
+        if (!step.empty() && step.back() == UINT32_MAX) step.pop_back();
+        if (step.empty()) break;  // apart, or only floor corners left: to the checks
+        around.clear();
+        moved.clear();
+        for (const std::uint32_t v : step) {
+          if (std::find(moved.begin(), moved.end(), v) != moved.end()) continue;  // its group
+          unwelded += step_back(s, v, shrink, [&](std::uint32_t u) {
+            lowered[u] = 1;
+            moved.push_back(u);
+            around.insert(around.end(), faces_[u].begin(), faces_[u].end());
+          });
+        }
+        std::sort(around.begin(), around.end());
+        around.erase(std::unique(around.begin(), around.end()), around.end());
+        unwelded += settle_volumes(s, around, shrink, options.zero_volume_tolerance, min_quality,
+                                   lowered);
+      }
+    }
+    return unwelded;
+  }
+
+  /// Multiplies v's floor by `factor` unless it was lowered `max_drops` times already.
+  bool lower_floor(std::uint32_t v, double factor, int max_drops) {
+    if (drops_[v] >= max_drops) return false;
+    ++drops_[v];
+    floor_[v] *= factor;
+    return true;
+  }
+
+  State floor_state() const {
+    State s{floor_, std::vector<char>(floor_.size(), 0)};
+    for (std::uint32_t v : folded_) s.t[v] = 0;
+    return s;
+  }
+
+  /// The faces around the vertices flagged in `flags`, in increasing order, into `out`.
+  void faces_around(const std::vector<char>& flags, std::vector<std::uint32_t>& out) const {
+    out.clear();
+    for (std::uint32_t v = 0; v < flags.size(); ++v)
+      if (flags[v]) out.insert(out.end(), faces_[v].begin(), faces_[v].end());
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+  }
+
+  /// position(v, t), remembered per vertex (most keep their depth from round to round).
+  Vec3d cached_position(std::uint32_t v, double t) const {
+    if (cached_t_[v] != t) {
+      cached_t_[v] = t;
+      cached_position_[v] = position(v, t);
+    }
+    return cached_position_[v];
+  }
+
+  Vec3d position(std::size_t v, double t) const {
+    const double end = traces_.end_arc(v);
+    const Vec3d bend = correction_[v] * std::min(t, floor_[v]);
+    if (t <= end) return point_at_arc(traces_, v, t) + bend;
+    return traces_.end_point(v) + fallback_[v] * (t - end) + bend;
+  }
+
+  /// Inner vertices of `s` (slots in order of their smallest member) and each slot's members.
+  ShellInput build(const State& s, Lists& members) const {
+    const std::size_t n = full_.size();
+    ShellInput in;
+    in.inner_id.resize(n);
+    in.inner_points.reserve(n);
+    std::vector<std::uint32_t> group_slot(start_.input.inner_points.size(), UINT32_MAX);
+    for (std::uint32_t v = 0; v < n; ++v) {
+      if (s.t[v] == 0) {
+        in.inner_id[v] = kOnSurface;
+      } else if (s.welded[v]) {
+        const std::uint32_t g = start_.input.inner_id[v];
+        if (group_slot[g] == UINT32_MAX) {
+          group_slot[g] = static_cast<std::uint32_t>(in.inner_points.size());
+          in.inner_points.push_back(start_.input.inner_points[g]);
+        }
+        in.inner_id[v] = group_slot[g];
+      } else {
+        in.inner_id[v] = static_cast<std::uint32_t>(in.inner_points.size());
+        in.inner_points.push_back(cached_position(v, s.t[v]));
+      }
+    }
+    in.cap_faces = caps_.cap_faces;
+    in.cap_points = caps_.cap_points;
+    members.build(in.inner_points.size(), [&](const auto& emit) {
+      for (std::uint32_t v = 0; v < n; ++v)
+        if (in.inner_id[v] != kOnSurface) emit(in.inner_id[v], v);
+    });
+    return in;
+  }
+
+ private:
+  const SurfaceMesh& surface_;
+  const TraceResult& traces_;
+  const InnerVertices& start_;
+  const StageMonitor& monitor_;  ///< checked every 1024 prisms of the serial loops
+  std::vector<double> full_, floor_;
+  std::vector<Vec3d> fallback_, correction_;
+  Lists groups_;                          ///< start weld group -> its vertices
+  std::vector<std::uint32_t> group_key_;  ///< per group: its smallest welded vertex (initial)
+  std::vector<double> group_depth_;       ///< per group: its welded members' largest depth
+  Lists faces_;                           ///< vertex -> its faces
+  std::vector<std::uint32_t> folded_;  ///< on the surface throughout (t_v = 0)
+  std::vector<int> drops_;             ///< per vertex: how often its floor was lowered
+  ShellInput caps_;                    ///< cap_faces and cap_points only
+  // position(v, t) of the last build, by vertex (t = -1: none yet).
+  mutable std::vector<double> cached_t_;
+  mutable std::vector<Vec3d> cached_position_;
+};
+
+/// Offending tets (overlapping pairs aside) and inner slots of a check.
+void collect_offenders(const SurfaceMesh& surface, const ShellInput& in,
+                       const ShellCheckResult& c, std::vector<std::uint32_t>& tets,
+                       std::vector<std::uint32_t>& slots) {
+  const std::uint32_t n = static_cast<std::uint32_t>(surface.points.size());
+  tets.clear();
+  slots.clear();
+  tets.insert(tets.end(), c.first_inverted_tets.begin(), c.first_inverted_tets.end());
+  tets.insert(tets.end(), c.first_zero_volume_tets.begin(), c.first_zero_volume_tets.end());
+  tets.insert(tets.end(), c.first_leaking_tets.begin(), c.first_leaking_tets.end());
+  for (std::uint32_t p : c.first_outside_vertices)
+    if (p >= n) slots.push_back(p - n);
+  for (const auto* list : {&c.first_missing_triangles, &c.first_shared_triangles,
+                           &c.first_misoriented_triangles})
+    for (std::uint32_t f : *list)
+      for (std::uint32_t v : surface.triangles[f])
+        if (in.inner_id[v] != kOnSurface) slots.push_back(in.inner_id[v]);
+  std::sort(tets.begin(), tets.end());
+  tets.erase(std::unique(tets.begin(), tets.end()), tets.end());
+}
+
+}  // namespace
+
+ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& traces,
+                            const InnerVertices& start, const ValidityOptions& options,
+                            const StageMonitor& monitor) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::uint32_t n = static_cast<std::uint32_t>(surface.points.size());
+  ShellSearch search(surface, traces, start, options, monitor);
+  ValidShell out;
+  Lists members;  ///< slot -> its surface vertices
+  AssembleOptions no_quality;
+  no_quality.compute_quality = false;
+
+  ShellCheckOptions check_options;
+  check_options.max_listed = std::numeric_limits<std::size_t>::max();
+  ShellChecker checker(surface, check_options);
+  // Inverted tets first: they are found in O(T) and a shell with any is not worth the rest.
+  auto check = [&](const TetMesh& mesh) {
+    ShellCheckResult volumes = check_volumes(mesh, check_options);
+    if (!volumes.valid()) return volumes;
+    ++out.checks_run;
+    return checker.check(mesh);
+  };
+
+  State s = search.initial();
+  std::vector<std::uint32_t> bad_tets, bad_slots;
+  std::vector<std::array<std::uint32_t, 2>> prism_pairs;
+  std::vector<char> lowered(n);
+  std::vector<std::uint32_t> seeds(surface.triangles.size());  // prisms to settle
+  std::iota(seeds.begin(), seeds.end(), 0u);
+  double first_offenders = 1;
+  for (;; ++out.rounds) {
+    // Inverted and flat tets are local: settle them prism by prism before a round.
+    out.unwelded += search.settle_volumes(s, seeds, options.shrink,
+                                          check_options.zero_volume_tolerance,
+                                          options.min_quality, lowered);
+    out.input = search.build(s, members);
+    out.shell = assemble_shell(surface, out.input, no_quality);
+    out.checks = check(out.shell.mesh);
+    if (out.checks.valid() || out.rounds >= options.max_rounds) break;
+    collect_offenders(surface, out.input, out.checks, bad_tets, bad_slots);
+    // Progress: the share of the first round's offenders gone (the final check is the last 10%).
+    const double offenders = double(bad_tets.size() + bad_slots.size() +
+                                    out.checks.first_overlapping_pairs.size());
+    if (out.rounds == 0) first_offenders = std::max(offenders, 1.0);
+    monitor.report(0.9 * (1.0 - offenders / first_offenders));
+    std::fill(lowered.begin(), lowered.end(), 0);
+    // Overlapping prisms, pair by pair: each is stepped back until it is apart.
+    prism_pairs.clear();
+    for (const auto& pair : out.checks.first_overlapping_pairs) {
+      const std::uint32_t f = out.shell.mesh.source_triangle[pair[0]];
+      const std::uint32_t g = out.shell.mesh.source_triangle[pair[1]];
+      prism_pairs.push_back({std::min(f, g), std::max(f, g)});
+    }
+    std::sort(prism_pairs.begin(), prism_pairs.end());
+    prism_pairs.erase(std::unique(prism_pairs.begin(), prism_pairs.end()), prism_pairs.end());
+    out.unwelded += search.settle_overlaps(s, prism_pairs, options.shrink, check_options,
+                                           options.min_quality, lowered);
+    bool progress = std::find(lowered.begin(), lowered.end(), 1) != lowered.end();
+    const auto n_slots = static_cast<std::uint32_t>(out.input.inner_points.size());
+    auto slot_depth = [&](std::uint32_t slot) {
+      double d = 0;
+      if (slot >= n_slots) return d;  // a cap point: never moves
+      for (std::uint32_t v : members[slot])
+        if (s.welded[v] || s.t[v] > search.floor()[v]) d = std::max(d, s.t[v]);
+      return d;  // 0: every member at its floor, nothing to move
+    };
+    auto lower = [&](std::uint32_t slot) {  // a welded slot leaves its weld whole
+      for (std::uint32_t v : members[slot])
+        if (!lowered[v])
+          out.unwelded += search.step_back(s, v, options.shrink, [&](std::uint32_t u) {
+            lowered[u] = 1;
+            progress = true;
+          });
+    };
+    for (std::uint32_t t : bad_tets) {
+      std::uint32_t best = UINT32_MAX;
+      double best_depth = 0;
+      for (std::uint32_t p : out.shell.mesh.tets[t]) {
+        if (p < n) continue;
+        const double d = slot_depth(p - n);
+        if (d > best_depth) {
+          best_depth = d;
+          best = p - n;
+        }
+      }
+      if (best != UINT32_MAX) lower(best);
+    }
+    for (std::uint32_t slot : bad_slots)
+      if (slot_depth(slot) > 0) lower(slot);
+    if (!progress) {
+      // Only elements at the floor offend. Next to a fold of the surface that is sharper than
+      // the floor (a razor-thin fin, typically next to a folded vertex) the floor itself is too
+      // thick: lower the floors of the offenders' vertices, a bounded number of times each.
+      auto drop = [&](std::uint32_t v) {
+        if (lowered[v] || s.t[v] == 0 || !search.lower_floor(v, options.floor_drop,
+                                                              options.max_floor_drops))
+          return;
+        lowered[v] = 1;
+        s.t[v] = search.floor()[v];
+        ++out.floor_drops;
+        progress = true;
+      };
+      for (const auto& [f, g] : prism_pairs)
+        for (const std::uint32_t face : {f, g})
+          for (const std::uint32_t v : surface.triangles[face]) drop(v);
+      for (std::uint32_t t : bad_tets)
+        for (std::uint32_t p : out.shell.mesh.tets[t])
+          if (p >= n && p - n < n_slots)
+            for (std::uint32_t v : members[p - n]) drop(v);
+      for (std::uint32_t slot : bad_slots)
+        if (slot < n_slots)
+          for (std::uint32_t v : members[slot]) drop(v);
+    }
+    if (!progress) {
+      // The floors are as low as they go: the floor configuration itself must be invalid.
+      const ShellInput in = search.build(search.floor_state(), members);
+      const ShellCheckResult c = check_shell(surface, assemble_shell(surface, in, no_quality).mesh);
+      out.floor_valid = c.valid();
+      if (!out.floor_valid) out.floor_problems = describe_problems(c);
+      out.folded_vertices = search.folded();
+      break;
+    }
+    search.faces_around(lowered, seeds);
+  }
+
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  monitor.report(0.9);
+
+  // The incremental checks trusted unchanged tets; the result carries one full check (the
+  // confirmation every run gets, valid search or not: out.checks.seconds, not out.seconds).
+  out.shell = assemble_shell(surface, out.input);  // with quality for the report and writers
+  {
+    ShellCheckOptions o;
+    out.checks = check_shell(surface, out.shell.mesh, o);
+  }
+  out.depth = s.t;
+  out.on_surface = search.folded();
+  out.cap_faces = search.caps();
+  double sum = 0;
+  for (std::uint32_t v = 0; v < n; ++v)
+    if (!s.welded[v] && s.t[v] < search.full()[v] * (1.0 - 1e-12)) {
+      ++out.moved_back;
+      sum += (search.full()[v] - s.t[v]) / search.full()[v];
+    }
+  out.moved_back_mean = out.moved_back ? sum / static_cast<double>(out.moved_back) : 0.0;
+  ++out.checks_run;  // the final full check
+  return out;
+}
+
+}  // namespace vdb_shell

@@ -1,0 +1,92 @@
+// search.h — the thickest valid shell (DESIGN "What the literal method gives"; issue 6).
+//
+// Unknowns: t_v, the arc length at which surface vertex v's inner vertex sits on its own trace
+// (0 = on the surface, full = the trace's end after thickness limits). Conditions: every tet of
+// every prism positive (for the split actually used), no two tets intersecting, no tet leaving
+// the surface, every inner vertex inside, every input triangle a boundary face.
+//
+// Method: start from the traced (and welded) end points. A step back moves t_v <- max(t_min_v,
+// shrink * t_v) (a welded group leaves its weld instead). First settle the volumes locally: any
+// prism with an inverted or flat tet steps back that tet's deepest movable inner vertex, and the
+// prisms around it are tested again, until none is left (a tet's volume and the prism split
+// depend on its own prism only). Then rounds: assemble and check everything; step back every
+// pair of overlapping prisms, pair by pair and locally, until it is apart; step back the
+// deepest movable vertex of every other offending element once; settle the volumes around
+// every move; repeat until no element offends.
+//
+// Why it terminates with a valid shell: every step lowers one t_v by a fixed factor down to a
+// floor t_min_v > 0 (or undoes a weld), and every round takes at least one step, so there are
+// finitely many steps and rounds. The floor configuration
+// (every vertex at t_min_v, no welds) is a thin offset along each trace's first, inward
+// direction, bent where needed to point inward for every incident face, so it is valid (a
+// folded vertex, with no such direction, stays on the surface: t_v = 0 throughout); an
+// offending element whose vertices are all at the floor is an element of that configuration,
+// which is impossible. So an offending element always has a vertex above its floor, and the
+// loop ends with no offending element. The floor is "thin enough" only to first order: should a
+// round find only floor elements offending (a crease sharper than the floor), their floors are
+// divided by floor_drop (at most max_floor_drops times each) and the search goes on; after that
+// the floor configuration is checked and the run fails, naming what it broke.
+// Vertices that were never involved keep their full depth: the shell stays as thick as the
+// traces allow wherever it is already valid; the gentle shrink, applied locally until each
+// offence is gone, takes little more than needed from those that were (docs/validity.md).
+//
+// Cost: one ShellChecker (shell_checks.h) serves every round, testing only the prisms that
+// moved since the previous round (or still offend); the result gets one full check_shell().
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "core/assemble/assemble.h"
+#include "core/inner/inner.h"
+#include "core/base/run_control.h"
+#include "core/validity/shell_checks.h"
+
+namespace vdb_shell {
+
+struct ValidityOptions {
+  double shrink = 0.85;         ///< factor applied to t_v of a moved-back vertex, in (0, 1)
+  /// Tets of a lower volume-length quality are settled like inverted ones (stepped back while a
+  /// corner can move; a sliver left at the floor is no violation). 0: volumes only.
+  double min_quality = 1e-3;
+  double floor_fraction = 0.02; ///< t_min_v = this * shortest incident edge (capped at full)
+  double floor_drop = 0.25;     ///< factor on the floor of a vertex offending at its floor
+  int max_floor_drops = 4;      ///< at most this many floor drops per vertex
+  int max_rounds = 1000;        ///< safety net (rounds are cheap)
+};
+
+struct ValidShell {
+  ShellInput input;               ///< final inner vertices (compact, order-preserving)
+  std::vector<double> depth;      ///< per surface vertex: final arc length t_v, world units
+  AssembleResult shell;           ///< the assembled shell
+  ShellCheckResult checks;        ///< checks of the final shell (valid() unless floor fails)
+  int rounds = 0;                 ///< rounds of the moving-back search
+  int checks_run = 0;             ///< shell checks run in all (the cost of this stage)
+  std::size_t moved_back = 0;     ///< vertices whose final t_v is below their traced depth
+  double moved_back_mean = 0;     ///< mean (traced - final) / traced over moved-back vertices
+  std::size_t unwelded = 0;       ///< vertices that left their weld
+  std::size_t floor_drops = 0;    ///< floors lowered where the floor itself offended
+  bool floor_valid = true;        ///< false: the search stalled and the floor failed too
+  std::string floor_problems;     ///< what the floor configuration broke, when it did
+  /// Folded surface vertices kept on the surface (inner_id kOnSurface, depth 0): their incident
+  /// face normals fit in no open hemisphere, and every prism constrains each of its corners'
+  /// inner directions against its face normal, so no thin shell has an inner vertex there. Their
+  /// prisms become pyramids, which the same first-order argument allows (docs/validity.md).
+  std::vector<std::uint32_t> on_surface;
+  /// Faces whose three corners are folded: their prism is one tet to a cap point at the floor
+  /// depth below the face (ShellInput::cap_faces).
+  std::size_t cap_faces = 0;
+  /// When the search stalled: every folded vertex (the failure is likely near them).
+  std::vector<std::uint32_t> folded_vertices;
+  double seconds = 0;             ///< the search, without the final full check (checks.seconds)
+};
+
+/// Finds the thickest valid inner vertices along the traces, starting from `start`. Reports to
+/// `monitor` the share of the first round's offending elements gone (90% of the stage; the
+/// final full check is the rest) and checks it.
+ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& traces,
+                            const InnerVertices& start, const ValidityOptions& options = {},
+                            const StageMonitor& monitor = StageMonitor());
+
+}  // namespace vdb_shell
