@@ -27,7 +27,6 @@
 namespace vdb_shell {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 using Ring = std::vector<std::uint32_t>;
 

@@ -19,6 +19,7 @@
 
 #include "assets/shapes.h"
 #include "core/base/errors.h"
+#include "core/base/file_name.h"
 #include "core/write/shell_writers.h"
 
 namespace {
@@ -71,9 +72,7 @@ int main(int argc, char** argv) {
     }
     if (name.empty()) throw InputError("no shape name given (see --list)");
     if (output.empty()) throw InputError("no output file given: add -o FILE.obj");
-    std::string ext = fs::path(output).extension().string();
-    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    if (ext != ".obj") {
+    if (vdb_shell::lower_extension(output) != ".obj") {
       throw InputError("output '" + output + "' must end in .obj (only OBJ is written)");
     }
     const vdb_shell::SurfaceMesh mesh = vdb_shell::make_shape(name, detail);

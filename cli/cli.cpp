@@ -20,6 +20,8 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include "core/base/file_name.h"
+#include "core/base/timer.h"
 #include "core/write/atomic_file.h"
 #include "core/write/shell_writers.h"
 #include "vdb_shell/vdb_shell.h"
@@ -67,10 +69,6 @@ struct CliOptions {
   }
 };
 
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
 
 std::string fmt(double v) {
   char buf[64];
@@ -172,9 +170,7 @@ void print_summary(std::ostream& out, const std::string& path, const LoadedSurfa
 
 /// Rejects options that contradict each other, saying what to do instead.
 bool is_vdb(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return ext == ".vdb";
+  return lower_extension(path) == ".vdb";
 }
 
 void check_contradictions(const CliOptions& o) {

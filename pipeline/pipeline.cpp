@@ -13,18 +13,13 @@
 #include <sstream>
 #include <utility>
 
+#include "core/base/timer.h"
 #include "core/write/trace_writer.h"
 #include "core/write/shell_writers.h"
 #include "vdb_ops/point_index_vdb.h"
 
 namespace vdb_shell {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
 
 void require(bool ok, const std::string& option, double value, const std::string& rule) {
   if (ok) return;

@@ -44,6 +44,7 @@
 
 #include "core/write/atomic_file.h"
 #include "core/base/errors.h"
+#include "core/base/timer.h"
 // After the OpenVDB headers: declares make_trace_points_grid() (vdb_ops/trace_points.h).
 #include "vdb_ops/trace_points.h"
 
@@ -69,10 +70,6 @@ constexpr double kMaxIndexCoord = 1 << 28;
 void init_openvdb() {
   static std::once_flag once;
   std::call_once(once, [] { openvdb::initialize(); });
-}
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 std::string format_double(double v) {

@@ -8,7 +8,6 @@
 namespace vdb_shell {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 }  // namespace
 

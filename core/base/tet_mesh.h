@@ -15,6 +15,12 @@ namespace vdb_shell {
 
 using Tet = std::array<std::uint32_t, 4>;
 
+/// Corners of the outward-oriented face opposite corner k of a positive tet (normal by the
+/// right-hand rule pointing out of the tet).
+inline constexpr int kTetOutwardFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+/// The six edges of a tet, as corner pairs.
+inline constexpr int kTetEdge[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+
 struct TetMesh {
   std::vector<Vec3d> points;  ///< world units
   std::vector<Tet> tets;      ///< positively oriented

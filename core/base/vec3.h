@@ -10,6 +10,8 @@
 
 namespace vdb_shell {
 
+inline constexpr double kPi = 3.14159265358979323846;
+
 struct Vec3d {
   double x = 0.0, y = 0.0, z = 0.0;
 

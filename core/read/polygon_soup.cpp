@@ -16,6 +16,7 @@
 #include <sstream>
 
 #include "core/base/errors.h"
+#include "core/base/file_name.h"
 
 namespace vdb_shell {
 namespace {
@@ -228,7 +229,7 @@ PolygonSoup read_polygon_soup(const std::string& path) {
     throw InputError(path + ": no such file; check the path");
   if (fs::is_directory(path, ec))
     throw InputError(path + ": is a directory, not a surface mesh file");
-  const std::string ext = lower(fs::path(path).extension().string());
+  const std::string ext = lower_extension(path);
   const auto& exts = supported_surface_extensions();
   if (std::find(exts.begin(), exts.end(), ext) == exts.end())
     throw InputError(path + ": unknown surface format '" + ext +

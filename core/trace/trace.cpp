@@ -8,15 +8,10 @@
 
 #include "core/base/errors.h"
 #include "core/base/parallel.h"
+#include "core/base/timer.h"
 
 namespace vdb_shell {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 /// grad(phi) normalised only when longer than one (paper: counters numerical diffusion).
 Vec3d clamp_unit(const Vec3d& g) {

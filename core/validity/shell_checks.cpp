@@ -22,20 +22,10 @@
 
 #include "core/base/errors.h"
 #include "core/base/parallel.h"
+#include "core/base/timer.h"
 
 namespace vdb_shell {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
-
-// Corners of the outward-oriented face opposite corner k of a positive tet.
-constexpr int kOutwardFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
-// The six edges of a tet, as corner pairs.
-constexpr int kTetEdge[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
-
-double seconds_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 void list_item(std::vector<std::uint32_t>& list, std::size_t max_listed, std::size_t item) {
   if (list.size() < max_listed) list.push_back(static_cast<std::uint32_t>(item));
@@ -681,7 +671,7 @@ void check_faces(const SurfaceMesh& surface, const TetMesh& mesh,
   std::vector<std::uint32_t> bucket(n_points + 1, 0);
   for (const Tet& v : mesh.tets)
     for (int k = 0; k < 4; ++k) {
-      const int* f = kOutwardFace[k];
+      const int* f = kTetOutwardFace[k];
       ++bucket[std::min({v[f[0]], v[f[1]], v[f[2]]}) + 1];
     }
   for (std::size_t p = 0; p < n_points; ++p) bucket[p + 1] += bucket[p];
@@ -691,7 +681,7 @@ void check_faces(const SurfaceMesh& surface, const TetMesh& mesh,
     for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
       const Tet& v = mesh.tets[t];
       for (int k = 0; k < 4; ++k) {
-        const int* f = kOutwardFace[k];
+        const int* f = kTetOutwardFace[k];
         const std::array<std::uint32_t, 3> key = sorted3(v[f[0]], v[f[1]], v[f[2]]);
         faces[fill[key[0]]++] = {key, static_cast<std::uint32_t>(t), static_cast<std::uint8_t>(k)};
       }
@@ -723,7 +713,7 @@ void check_faces(const SurfaceMesh& surface, const TetMesh& mesh,
       list_item(result.first_shared_triangles, max_listed, f);
     } else {
       const Tet& v = mesh.tets[lo->tet];
-      const int* k = kOutwardFace[lo->face];
+      const int* k = kTetOutwardFace[lo->face];
       if (!same_cycle({v[k[0]], v[k[1]], v[k[2]]}, tri)) {
         ++result.misoriented_triangles;
         list_item(result.first_misoriented_triangles, max_listed, f);

@@ -19,6 +19,7 @@
 
 #include "core/write/atomic_file.h"
 #include "core/base/errors.h"
+#include "core/base/file_name.h"
 
 namespace vdb_shell {
 namespace {
@@ -77,15 +78,6 @@ class TextOut {
   std::ostream& os_;
   std::string buffer_;
 };
-
-std::string lower_extension(const std::string& path) {
-  const std::size_t slash = path.find_last_of("/\\");
-  const std::size_t dot = path.find_last_of('.');
-  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return {};
-  std::string ext = path.substr(dot);
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return ext;
-}
 
 std::string join(const std::vector<std::string>& items) {
   std::string s;
@@ -494,7 +486,6 @@ TetFormat tet_format_from_path(const std::string& path, int msh_version) {
 std::vector<Triangle> tet_boundary_faces(const TetMesh& mesh) {
   // Faces opposite vertex 0, 1, 2, 3 of a positive tet (a, b, c, d), each with its normal
   // (right-hand rule) pointing out of the tet.
-  static constexpr int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
   struct FaceKey {
     std::array<std::uint32_t, 3> sorted;
     std::uint64_t slot;  // 4 * tet + local face
@@ -504,7 +495,7 @@ std::vector<Triangle> tet_boundary_faces(const TetMesh& mesh) {
   for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
     const Tet& tet = mesh.tets[t];
     for (int f = 0; f < 4; ++f) {
-      std::array<std::uint32_t, 3> s = {tet[kFace[f][0]], tet[kFace[f][1]], tet[kFace[f][2]]};
+      std::array<std::uint32_t, 3> s = {tet[kTetOutwardFace[f][0]], tet[kTetOutwardFace[f][1]], tet[kTetOutwardFace[f][2]]};
       std::sort(s.begin(), s.end());
       keys.push_back({s, 4 * static_cast<std::uint64_t>(t) + static_cast<std::uint64_t>(f)});
     }
@@ -523,7 +514,7 @@ std::vector<Triangle> tet_boundary_faces(const TetMesh& mesh) {
   for (std::size_t slot = 0; slot < boundary.size(); ++slot) {
     if (!boundary[slot]) continue;
     const Tet& tet = mesh.tets[slot / 4];
-    const int* f = kFace[slot % 4];
+    const int* f = kTetOutwardFace[slot % 4];
     faces.push_back({tet[f[0]], tet[f[1]], tet[f[2]]});
   }
   return faces;
