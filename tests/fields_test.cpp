@@ -18,6 +18,7 @@
 #include "core/read/load_surface.h"
 #include "tests/test_support.h"
 #include "vdb_ops/fields.h"
+#include "vdb_ops/fields_diagnostics.h"
 
 namespace vdb_shell {
 namespace {

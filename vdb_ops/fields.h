@@ -166,9 +166,8 @@ class Fields : public FieldSampler {
   /// The build parameters, as written into the .vdb metadata (name -> value as text).
   const std::map<std::string, std::string>& parameters() const;
 
-  const Impl& impl() const { return *impl_; }
-
  private:
+  friend struct FieldsAccess;  // the parts of the build (vdb_ops/fields/fields_internal.h)
   std::unique_ptr<Impl> impl_;
 };
 
@@ -239,28 +238,5 @@ std::vector<VdbGridInfo> read_vdb_grid_infos(const std::string& path);
 /// The same description of the in-memory grids of `fields` (as write_grids() would name them,
 /// without the extra metadata).
 std::vector<VdbGridInfo> grid_infos(const Fields& fields);
-
-/// The kExactInterior seed band built twice at plan_fields()'s voxel size: as build_fields()
-/// builds it (its own voxelization where that applies, then meshToVolume's remaining steps) and
-/// by OpenVDB's meshToVolume alone, with the voxels that differ.
-struct SeedBandComparison {
-  bool voxelized_here = false;         ///< false: the mesh went to meshToVolume both times
-                                       ///< (fewer than 1000 triangles, or a huge triangle)
-  std::size_t flood_filled = 0;        ///< triangles voxelized by a flood fill (thin, or tall
-                                       ///< boxes) instead of bit rows
-  std::size_t band_voxels = 0;         ///< active voxels of the band
-  std::size_t differing_voxels = 0;    ///< distance, triangle or active state differ, plus one
-                                       ///< per tree whose tiles differ (0 expected)
-  double seconds = 0.0;                ///< build_fields()'s band
-  double seconds_mesh_to_volume = 0.0; ///< meshToVolume's
-};
-
-/// For tests and benchmarks: see SeedBandComparison.
-SeedBandComparison compare_seed_band(const SurfaceMesh& mesh, const FieldOptions& options);
-
-/// Benchmark floor: OpenVDB's plain narrow-band meshToLevelSet (half-width 3 voxels) of `mesh`
-/// at the voxel size plan_fields() derives. Returns its time (seconds_sdf, seconds_total), active
-/// voxel count and memory; no fields are kept.
-FieldStats build_narrow_band_reference(const SurfaceMesh& mesh, const FieldOptions& options);
 
 }  // namespace vdb_shell

@@ -14,8 +14,7 @@
 #include <vector>
 
 #include "core/base/errors.h"
-// After the OpenVDB headers: trace_points.h then declares make_trace_points_grid() too.
-#include "vdb_ops/trace_points.h"
+#include "vdb_ops/trace_points_grid.h"
 
 namespace vdb_shell {
 

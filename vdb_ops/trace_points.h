@@ -19,9 +19,9 @@
 // tools::PointPartitioner sort is stable. The grid and the file are therefore the same for any
 // thread count.
 //
-// This header includes no OpenVDB header. make_trace_points_grid() below is declared only for
-// translation units that already include OpenVDB (vdb_ops/fields.cpp uses it to write the grid in
-// the same atomic file as the fields); everyone else sees the plain-data reader.
+// This header includes no OpenVDB header; the grid itself is made by make_trace_points_grid()
+// (trace_points_grid.h), which write_grids() uses to write it in the same atomic file as the
+// fields.
 #pragma once
 
 #include <cstddef>
@@ -65,16 +65,3 @@ TracePoints read_trace_points(const std::string& vdb_path,
                               const std::string& grid_name = kTracePointsGridName);
 
 }  // namespace vdb_shell
-
-#ifdef OPENVDB_VERSION_NAME  // only for translation units that include OpenVDB (fields.cpp)
-namespace vdb_shell {
-
-/// The `traces` PointDataGrid of `traces` with transform `xform` (the `surface` grid's), named
-/// kTracePointsGridName, carrying trace_points_metadata() and the trace parameters.
-/// \throw InputError if there are more than 2^31 - 1 traces (the int32 `vertex` attribute);
-///        InternalError if a stored sample is not finite.
-openvdb::GridBase::Ptr make_trace_points_grid(const TraceResult& traces,
-                                              const openvdb::math::Transform& xform);
-
-}  // namespace vdb_shell
-#endif

@@ -45,6 +45,7 @@
 #include "core/read/load_surface.h"
 #include "core/write/shell_writers.h"
 #include "vdb_ops/fields.h"
+#include "vdb_ops/fields_diagnostics.h"
 
 namespace vdb_shell {
 namespace {

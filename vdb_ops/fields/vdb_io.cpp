@@ -1,0 +1,292 @@
+// vdb_io.cpp — .vdb files: write_grids() (content-derived header UUID), reading grid
+// descriptions, reading a level set grid, and level_set_to_soup() (OpenVDB volumeToMesh).
+#include "vdb_ops/fields/fields_internal.h"
+
+#include <openvdb/io/File.h>
+#include <openvdb/io/Stream.h>
+#include <openvdb/tools/VolumeToMesh.h>
+
+#include <filesystem>
+#include <sstream>
+
+#include "core/base/errors.h"
+#include "core/write/atomic_file.h"
+#include "vdb_ops/trace_points_grid.h"
+
+namespace vdb_shell {
+
+using namespace fields_detail;
+
+namespace {
+
+std::uint64_t fnv1a(std::uint64_t h, const void* data, std::size_t n) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  for (std::size_t i = 0; i < n; ++i) {
+    h ^= p[i];
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+
+template <typename GridT>
+std::uint64_t checksum_of(const GridT& grid) {
+  std::uint64_t h = 14695981039346656037ull;
+  // Value iteration order is the tree's (deterministic for equal topology).
+  for (auto it = grid.cbeginValueOn(); it; ++it) {
+    openvdb::CoordBBox box;
+    it.getBoundingBox(box);
+    const auto value = *it;
+    h = fnv1a(h, &box, sizeof(box));
+    h = fnv1a(h, &value, sizeof(value));
+  }
+  return h;
+}
+
+VdbGridInfo info_of(const openvdb::GridBase& grid) {
+  VdbGridInfo info;
+  info.name = grid.getName();
+  info.value_type = grid.valueType();
+  info.grid_class = openvdb::GridBase::gridClassToString(grid.getGridClass());
+  info.active_voxels = grid.activeVoxelCount();
+  info.voxel_size = grid.voxelSize()[0];
+  for (auto it = grid.beginMeta(); it != grid.endMeta(); ++it) {
+    info.metadata[it->first] = it->second ? it->second->str() : std::string();
+  }
+  if (const auto* f = dynamic_cast<const FloatGrid*>(&grid)) {
+    info.checksum = checksum_of(*f);
+  } else if (const auto* v = dynamic_cast<const Vec3SGrid*>(&grid)) {
+    info.checksum = checksum_of(*v);
+  }
+  return info;
+}
+
+openvdb::GridPtrVec output_grids(const Fields& fields,
+                                 const std::map<std::string, std::string>& metadata) {
+  const Fields::Impl& f = FieldsAccess::impl(fields);
+  openvdb::GridPtrVec grids;
+  std::vector<openvdb::GridBase::Ptr> all = {f.sdf->copyGrid(), f.flux->copyGrid()};
+  if (f.gradient) all.push_back(f.gradient->copyGrid());
+  for (openvdb::GridBase::Ptr& g : all) {
+    for (const auto& [k, v] : fields.parameters()) g->insertMeta(k, openvdb::StringMetadata(v));
+    for (const auto& [k, v] : metadata) g->insertMeta(k, openvdb::StringMetadata(v));
+    grids.push_back(g);
+  }
+  return grids;
+}
+
+/// OpenVDB writes a random UUID into every file header, as 36 characters at byte kUuidOffset
+/// (after the magic number, three version numbers and a flag), so two writes of the same grids
+/// would differ. write_grids() replaces it by one derived from the rest of the file: the same
+/// grids give the same bytes (for any thread count, on every run), and different content still
+/// gets a different UUID, which is what OpenVDB compares it for.
+constexpr std::streamoff kUuidOffset = 21;
+constexpr std::size_t kUuidChars = 36;
+
+/// Forwards every byte to `target`, hashing all but the header's UUID and keeping a copy of it.
+class HashingBuf final : public std::streambuf {
+ public:
+  explicit HashingBuf(std::streambuf* target) : target_(target) {}
+
+  /// "xxxxxxxx-xxxx-8xxx-axxx-xxxxxxxxxxxx" from the hash (RFC 9562 version 8, custom), or ""
+  /// when the header did not hold a UUID where expected (then the file is left as written).
+  std::string content_uuid() const {
+    if (!is_uuid(uuid_)) return "";
+    std::uint64_t hi = hash_, lo = hash_ ^ (bytes_ * 0x9e3779b97f4a7c15ull);
+    lo ^= lo >> 30, lo *= 0xbf58476d1ce4e5b9ull, lo ^= lo >> 27, lo *= 0x94d049bb133111ebull;
+    lo ^= lo >> 31;  // splitmix64 finaliser
+    hi = (hi & ~0xf000ull) | 0x8000ull;                      // version 8
+    lo = (lo & ~(0x3ull << 62)) | (0x2ull << 62);            // variant 10
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%08llx-%04llx-%04llx-%04llx-%012llx",
+                  static_cast<unsigned long long>(hi >> 32),
+                  static_cast<unsigned long long>((hi >> 16) & 0xffff),
+                  static_cast<unsigned long long>(hi & 0xffff),
+                  static_cast<unsigned long long>(lo >> 48),
+                  static_cast<unsigned long long>(lo & 0xffffffffffffull));
+    return buf;
+  }
+
+ protected:
+  std::streamsize xsputn(const char* s, std::streamsize n) override {
+    const std::uint64_t begin = bytes_, end = bytes_ + static_cast<std::uint64_t>(n);
+    const std::uint64_t u0 = kUuidOffset, u1 = u0 + kUuidChars;
+    auto hash = [&](std::uint64_t a, std::uint64_t b) {  // absolute offsets [a, b)
+      if (a < b) hash_ = fnv1a(hash_, s + (a - begin), b - a);
+    };
+    hash(begin, std::min(end, u0));
+    const std::uint64_t c0 = std::max(begin, u0), c1 = std::min(end, u1);
+    if (c0 < c1) uuid_.append(s + (c0 - begin), c1 - c0);
+    hash(std::max(begin, u1), end);
+    bytes_ = end;
+    return target_->sputn(s, n);
+  }
+  int_type overflow(int_type c) override {
+    if (traits_type::eq_int_type(c, traits_type::eof())) return traits_type::not_eof(c);
+    const char ch = traits_type::to_char_type(c);
+    return xsputn(&ch, 1) == 1 ? c : traits_type::eof();
+  }
+  int sync() override { return target_->pubsync(); }
+
+ private:
+  static bool is_uuid(const std::string& u) {
+    if (u.size() != kUuidChars) return false;
+    for (std::size_t i = 0; i < u.size(); ++i) {
+      const bool dash = i == 8 || i == 13 || i == 18 || i == 23;
+      if (dash ? u[i] != '-' : !std::isxdigit(static_cast<unsigned char>(u[i]))) return false;
+    }
+    return true;
+  }
+
+  std::streambuf* target_;
+  std::uint64_t hash_ = 14695981039346656037ull;
+  std::uint64_t bytes_ = 0;
+  std::string uuid_;
+};
+
+
+}  // namespace
+
+void write_grids(const std::string& path, const Fields& fields,
+                 const std::map<std::string, std::string>& metadata,
+                 const TraceResult* traces) {
+  init_openvdb();
+  auto tag = [&](openvdb::MetaMap& m) {
+    for (const auto& [k, v] : fields.parameters()) m.insertMeta(k, openvdb::StringMetadata(v));
+    for (const auto& [k, v] : metadata) m.insertMeta(k, openvdb::StringMetadata(v));
+  };
+  openvdb::GridPtrVec grids = output_grids(fields, metadata);
+  if (traces) {
+    grids.push_back(make_trace_points_grid(*traces, FieldsAccess::impl(fields).sdf->transform()));
+    tag(*grids.back());
+  }
+  openvdb::MetaMap file_meta;
+  tag(file_meta);
+  write_file_atomically(path, [&](std::ostream& os) {
+    HashingBuf hashing(os.rdbuf());
+    std::ostream hashed(&hashing);
+    try {
+      openvdb::io::Stream(hashed).write(grids, file_meta);
+    } catch (const openvdb::Exception& e) {
+      throw ResourceError("cannot write '" + path + "': " + e.what());
+    }
+    const std::string uuid = hashing.content_uuid();
+    if (hashed && !uuid.empty()) {
+      os.seekp(kUuidOffset);
+      os.write(uuid.data(), static_cast<std::streamsize>(uuid.size()));
+      os.seekp(0, std::ios::end);
+    }
+    if (!hashed || !os)
+      throw ResourceError("cannot write '" + path + "': write failed (disk full?)");
+  });
+}
+
+std::vector<VdbGridInfo> read_vdb_grid_infos(const std::string& path) {
+  init_openvdb();
+  require_readable(path);
+  std::vector<VdbGridInfo> out;
+  try {
+    openvdb::io::File file(path);
+    file.open(false);
+    openvdb::GridPtrVecPtr grids = file.getGrids();
+    file.close();
+    for (const openvdb::GridBase::Ptr& g : *grids) out.push_back(info_of(*g));
+  } catch (const openvdb::Exception& e) {
+    throw InputError("cannot read '" + path + "' as a .vdb file: " + e.what());
+  }
+  return out;
+}
+
+std::vector<VdbGridInfo> grid_infos(const Fields& fields) {
+  std::vector<VdbGridInfo> out;
+  for (const openvdb::GridBase::Ptr& g : output_grids(fields, {})) out.push_back(info_of(*g));
+  return out;
+}
+
+namespace fields_detail {
+
+void require_readable(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    throw InputError("cannot read level set file '" + path + "': no such file");
+  }
+}
+
+FloatGrid::Ptr read_level_set_grid(const std::string& vdb_path, const std::string& grid_name,
+                                   std::string& where) {
+  openvdb::GridBase::Ptr base;
+  std::string chosen;
+  try {
+    openvdb::io::File file(vdb_path);
+    file.open(false);
+    openvdb::GridPtrVecPtr metas = file.readAllGridMetadata();
+    std::string names;
+    for (const auto& m : *metas) names += (names.empty() ? "'" : ", '") + m->getName() + "'";
+    if (!grid_name.empty()) {
+      if (!file.hasGrid(grid_name)) {
+        throw InputError("'" + vdb_path + "' has no grid named '" + grid_name +
+                         "'; its grids are " + (names.empty() ? "none" : names));
+      }
+      chosen = grid_name;
+    } else {
+      auto is_float_ls = [](const openvdb::GridBase& g) {
+        return g.isType<FloatGrid>() && g.getGridClass() == openvdb::GRID_LEVEL_SET;
+      };
+      for (const auto& m : *metas) {
+        if (m->getName() == "surface" && is_float_ls(*m)) chosen = "surface";
+      }
+      for (const auto& m : *metas) {
+        if (chosen.empty() && is_float_ls(*m)) chosen = m->getName();
+      }
+      if (chosen.empty()) {
+        throw InputError("'" + vdb_path + "' holds no float level set grid (its grids: " +
+                         (names.empty() ? "none" : names) +
+                         "); pass --grid NAME, and if that grid is a signed distance field, "
+                         "set its grid class to level set");
+      }
+    }
+    base = file.readGrid(chosen);
+    file.close();
+  } catch (const openvdb::Exception& e) {
+    throw InputError("cannot read '" + vdb_path + "' as a .vdb file: " + e.what());
+  }
+  FloatGrid::Ptr grid = openvdb::gridPtrCast<FloatGrid>(base);
+  where = "grid '" + chosen + "' of '" + vdb_path + "'";
+  if (!grid) {
+    throw InputError(where + " holds " + base->valueType() +
+                     " values; a level set must be a float grid");
+  }
+  if (grid->getGridClass() != openvdb::GRID_LEVEL_SET) {
+    throw InputError(where + " is not a level set (its class is '" +
+                     openvdb::GridBase::gridClassToString(grid->getGridClass()) +
+                     "'); if it holds signed distances (negative inside), try setting the grid "
+                     "class to level set");
+  }
+  return grid;
+}
+
+}  // namespace fields_detail
+
+PolygonSoup level_set_to_soup(const std::string& vdb_path, const std::string& grid_name,
+                              double adaptivity) {
+  init_openvdb();
+  require_readable(vdb_path);
+  if (!(adaptivity >= 0.0 && adaptivity <= 1.0))
+    throw InputError("--adaptivity must lie in [0, 1]; got " + format_double(adaptivity));
+  std::string where;
+  const FloatGrid::Ptr grid = read_level_set_grid(vdb_path, grid_name, where);
+  std::vector<openvdb::Vec3s> points;
+  std::vector<openvdb::Vec3I> triangles;
+  std::vector<openvdb::Vec4I> quads;
+  openvdb::tools::volumeToMesh(*grid, points, triangles, quads, 0.0, adaptivity);
+  PolygonSoup soup;
+  soup.points.reserve(points.size());
+  for (const openvdb::Vec3s& p : points) soup.points.push_back({p[0], p[1], p[2]});
+  // OpenVDB's polygons face into the negative (inside) region: reverse them to face outward.
+  for (const openvdb::Vec3I& t : triangles) soup.polygons.push_back({t[2], t[1], t[0]});
+  for (const openvdb::Vec4I& q : quads) soup.polygons.push_back({q[3], q[2], q[1], q[0]});
+  if (soup.polygons.empty())
+    throw InputError(where + " has no zero crossing: its level set holds no surface to mesh");
+  return soup;
+}
+
+}  // namespace vdb_shell
