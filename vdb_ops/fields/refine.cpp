@@ -152,37 +152,31 @@ std::vector<LeafBits> dilate_bits(const LeafTable& table, const std::vector<Leaf
   return out;
 }
 
-/// Refinement after the wavefront; reads triangles, writes only each voxel's own phi (|phi| only
-/// decreases; signs and triangles are kept): deterministic.
-///  1. The band's voxels (`seeds`) whose 26 neighbours' triangles face away from their own join
-///     `medial` (the wavefront marked only the voxels it filled). Their distances are OpenVDB's
-///     voxelization's: measuring the neighbours' triangles there changes 8 voxels of fertility at
-///     256^3 by more than 0.1 voxel (at most 0.13), none of fandisk's at 512^3.
-///  2. The voxels within 2 of `medial` ones (the flux stencil) measure the triangles of their
-///     5^3 neighbourhood: there, closest-triangle cells are thinner than a voxel and the
-///     wavefront may have missed a voxel's closest triangle by a few hundredths of a voxel, which
-///     shows in the flux (the centre of a sphere). Per leaf, the block's triangles become bits
-///     of a word (up to 64 distinct ones; else per octant of the leaf, else one voxel at a time)
-///     and a voxel's neighbourhood is the union of 5 x 5 x 5 words, taken along z, then y, then
-///     x: fandisk 512^3 measures 689k voxels in 3,685 leaves, 0.20 s -> 0.12 s on 2 threads,
-///     fertility x16 0.33 s -> 0.29 s, same grids byte for byte.
-void refine_medial_voxels(const LeafTable& table, const std::vector<LeafBits>& known,
-                                   const std::vector<LeafBits>& seeds,
-                                   std::vector<LeafBits> medial, const std::int32_t* ids,
-                                   const std::vector<TriangleF>& tris, float h) {
-  const std::size_t n_leaves = table.leaves.size();
-  // Neighbour offsets in the blocks of halo 1 (10^3) and 2 (12^3).
-  std::vector<int> off1, off2;
-  for (int x = -2; x <= 2; ++x)
-    for (int y = -2; y <= 2; ++y)
-      for (int z = -2; z <= 2; ++z) {
-        if (x == 0 && y == 0 && z == 0) continue;
-        if (std::abs(x) <= 1 && std::abs(y) <= 1 && std::abs(z) <= 1) {
-          off1.push_back((x * 10 + y) * 10 + z);
+namespace {
+
+/// Neighbour offsets in the blocks of halo 1 (10^3: the 26 neighbours) and 2 (12^3: the 124 of
+/// the 5^3 neighbourhood).
+struct NeighbourOffsets {
+  std::vector<int> halo1, halo2;
+  NeighbourOffsets() {
+    for (int x = -2; x <= 2; ++x)
+      for (int y = -2; y <= 2; ++y)
+        for (int z = -2; z <= 2; ++z) {
+          if (x == 0 && y == 0 && z == 0) continue;
+          if (std::abs(x) <= 1 && std::abs(y) <= 1 && std::abs(z) <= 1) {
+            halo1.push_back((x * 10 + y) * 10 + z);
+          }
+          halo2.push_back((x * 12 + y) * 12 + z);
         }
-        off2.push_back((x * 12 + y) * 12 + z);
-      }
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_leaves, 16),
+  }
+};
+
+/// Step 1: the seed voxels whose 26 neighbours' triangles face away from their own join `medial`.
+void mark_medial_seeds(const LeafTable& table, const std::vector<LeafBits>& known,
+                       const std::vector<LeafBits>& seeds, const std::int32_t* ids,
+                       const std::vector<TriangleF>& tris, const NeighbourOffsets& offsets,
+                       std::vector<LeafBits>& medial) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, table.leaves.size(), 16),
                     [&](const tbb::blocked_range<std::size_t>& range) {
     std::int32_t block[1000];
     for (std::size_t li = range.begin(); li < range.end(); ++li) {
@@ -193,11 +187,10 @@ void refine_medial_voxels(const LeafTable& table, const std::vector<LeafBits>& k
           const int b = __builtin_ctzll(bits), y = b >> 3, z = b & 7;
           const int c = ((x + 1) * 10 + y + 1) * 10 + z + 1;
           const std::int32_t own = block[c];
-          for (int k : off1) {
+          for (int k : offsets.halo1) {
             const std::int32_t id = block[c + k];
             if (id >= 0 && id != own &&
-                dot3(tris[std::size_t(own)].n, tris[std::size_t(id)].n) <
-                    kMedialNormalCos) {
+                dot3(tris[std::size_t(own)].n, tris[std::size_t(id)].n) < kMedialNormalCos) {
               medial[li][x] |= std::uint64_t(1) << b;
               break;
             }
@@ -205,115 +198,167 @@ void refine_medial_voxels(const LeafTable& table, const std::vector<LeafBits>& k
         }
     }
   });
-  tbb::enumerable_thread_specific<TriangleSlots> slots(TriangleSlots(tris.size()));
-  // Lowers phi at voxel (x, y, z) of a leaf to its distance to triangles cand[0, nc).
-  auto lower = [&](FloatLeaf& leaf, int x, int y, int z, const std::int32_t* cand, int nc) {
+}
+
+/// Step 2, one thread's share: lowers phi at the voxels of a leaf to the distance to the
+/// triangles of their 5^3 neighbourhoods.
+class NeighbourhoodRefiner {
+ public:
+  NeighbourhoodRefiner(const std::vector<TriangleF>& tris, float h,
+                       const NeighbourOffsets& offsets, TriangleSlots& map)
+      : tris_(tris), h_(h), offsets_(offsets), map_(map) {}
+
+  /// The voxels `todo` of `leaf`, whose 12^3 block of triangles (leaf and halo 2) is `block()`.
+  void refine_leaf(FloatLeaf& leaf, const LeafBits& todo) {
+    if (by_words(leaf, todo, 0, 0, 0, 8)) return;
+    // Many small triangles: the leaf's octants, else voxel by voxel.
+    for (int octant = 0; octant < 8; ++octant) {
+      const int ox = 4 * (octant >> 2), oy = 4 * (octant >> 1 & 1), oz = 4 * (octant & 1);
+      if (!by_words(leaf, todo, ox, oy, oz, 4)) voxel_by_voxel(leaf, todo, ox, oy, oz);
+    }
+  }
+
+  std::int32_t* block() { return block_.data(); }
+
+ private:
+  static constexpr int kN = 12;  // block side: the leaf and a halo of 2
+
+  /// Lowers phi at voxel (x, y, z) of a leaf to its distance to triangles cand[0, nc).
+  void lower(FloatLeaf& leaf, int x, int y, int z, int nc) {
     if (nc == 0) return;
     float* phi = leaf.buffer().data();
     const int pos = (x << 6) | (y << 3) | z;
     const Coord origin = leaf.origin();
     const float p[3] = {float(origin[0] + x), float(origin[1] + y), float(origin[2] + z)};
-    float best = (phi[pos] / h) * (phi[pos] / h);
+    float best = (phi[pos] / h_) * (phi[pos] / h_);
     std::int32_t best_id = -1;
-    lower_to_closest(p, cand, nc, tris, best, best_id);
-    const float d = std::sqrt(best) * h;
+    lower_to_closest(p, cand_, nc, tris_, best, best_id);
+    const float d = std::sqrt(best) * h_;
     if (d < std::abs(phi[pos])) phi[pos] = phi[pos] < 0.0f ? -d : d;
-  };
+  }
+
+  /// Lowers the voxels `todo` of the leaf's cube [o, o + n)^3 (n = 8 or 4) by the triangles of
+  /// their 5^3 neighbourhoods, taken as unions of bit words (one bit per distinct triangle of
+  /// the window, OR-ed along z, then y, then x); false (nothing done) when the cube's window
+  /// [o - 2, o + n + 2)^3 holds more than 64 distinct triangles.
+  bool by_words(FloatLeaf& leaf, const LeafBits& todo, int ox, int oy, int oz, int n) {
+    const int w = n + 4;  // window side
+    map_.clear();
+    int n_distinct = 0;
+    for (int x = 0; x < w; ++x)
+      for (int y = 0; y < w; ++y) {
+        const std::int32_t* src = &block_[std::size_t(((ox + x) * kN + oy + y) * kN + oz)];
+        std::uint64_t* dst = &bit_[std::size_t((x * w + y) * w)];
+        std::int32_t previous = -1;
+        std::uint64_t previous_bit = 0;
+        for (int z = 0; z < w; ++z) {
+          const std::int32_t id = src[z];
+          if (id != previous && id >= 0) {
+            previous = id;
+            previous_bit = map_.bit(id, distinct_, n_distinct);
+            if (!previous_bit) return false;
+          }
+          dst[z] = id >= 0 ? previous_bit : 0;
+        }
+      }
+    for (int x = 0; x < w; ++x)
+      for (int y = 0; y < w; ++y)
+        for (int z = 0; z < n; ++z) {
+          const std::uint64_t* row = &bit_[std::size_t((x * w + y) * w + z)];
+          along_z_[std::size_t((x * w + y) * n + z)] = row[0] | row[1] | row[2] | row[3] | row[4];
+        }
+    for (int x = 0; x < w; ++x)
+      for (int y = 0; y < n; ++y)
+        for (int z = 0; z < n; ++z) {
+          const std::uint64_t* col = &along_z_[std::size_t((x * w + y) * n + z)];
+          along_yz_[std::size_t((x * n + y) * n + z)] =
+              col[0] | col[n] | col[2 * n] | col[3 * n] | col[4 * n];
+        }
+    const std::uint64_t z_mask = ((std::uint64_t(1) << n) - 1) << oz;
+    for (int x = 0; x < n; ++x)
+      for (int y = 0; y < n; ++y) {
+        for (std::uint64_t bits = (todo[ox + x] >> (8 * (oy + y))) & z_mask; bits;
+             bits &= bits - 1) {
+          const int z = __builtin_ctzll(bits) - oz;
+          const std::uint64_t* sheet = &along_yz_[std::size_t((x * n + y) * n + z)];
+          const int nn = n * n;
+          std::uint64_t around =
+              sheet[0] | sheet[nn] | sheet[2 * nn] | sheet[3 * nn] | sheet[4 * nn];
+          around &= ~bit_[std::size_t(((x + 2) * w + y + 2) * w + z + 2)];
+          int nc = 0;
+          for (; around; around &= around - 1) cand_[nc++] = distinct_[__builtin_ctzll(around)];
+          lower(leaf, ox + x, oy + y, oz + z, nc);
+        }
+      }
+    return true;
+  }
+
+  /// The voxels `todo` of the octant at o, each with its own list of distinct triangles.
+  void voxel_by_voxel(FloatLeaf& leaf, const LeafBits& todo, int ox, int oy, int oz) {
+    for (int x = ox; x < ox + 4; ++x)
+      for (std::uint64_t bits = todo[x] & (std::uint64_t(0x0f0f0f0f) << (8 * oy + oz)); bits;
+           bits &= bits - 1) {
+        const int b = __builtin_ctzll(bits), y = b >> 3, z = b & 7;
+        const int c = ((x + 2) * kN + y + 2) * kN + z + 2;
+        const std::int32_t own = block_[std::size_t(c)];
+        map_.clear();
+        int nc = 0;
+        for (int k : offsets_.halo2) {
+          const std::int32_t id = block_[std::size_t(c + k)];
+          if (id < 0 || id == own || map_.stamp[std::size_t(id)] == map_.now) continue;
+          map_.stamp[std::size_t(id)] = map_.now;
+          cand_[nc++] = id;
+        }
+        lower(leaf, x, y, z, nc);
+      }
+  }
+
+  const std::vector<TriangleF>& tris_;
+  const float h_;
+  const NeighbourOffsets& offsets_;
+  TriangleSlots& map_;
+  std::vector<std::int32_t> block_ = std::vector<std::int32_t>(kN * kN * kN);
+  // Per block voxel of a window, the bit of its triangle among the window's distinct ones;
+  // their unions over 5 neighbours along z, then over 5 x 5 in y and z.
+  std::vector<std::uint64_t> bit_ = std::vector<std::uint64_t>(kN * kN * kN);
+  std::vector<std::uint64_t> along_z_ = std::vector<std::uint64_t>(kN * kN * 8);
+  std::vector<std::uint64_t> along_yz_ = std::vector<std::uint64_t>(kN * 8 * 8);
+  std::int32_t distinct_[64];
+  std::int32_t cand_[124];
+};
+
+}  // namespace
+
+/// Refinement after the wavefront; reads triangles, writes only each voxel's own phi (|phi| only
+/// decreases; signs and triangles are kept): deterministic.
+///  1. The band's voxels (`seeds`) whose 26 neighbours' triangles face away from their own join
+///     `medial` (the wavefront marked only the voxels it filled). Their distances are OpenVDB's
+///     voxelization's, and may miss a closer triangle by a little more than 0.1 voxel there.
+///  2. The voxels within 2 of `medial` ones (the flux stencil) measure the triangles of their
+///     5^3 neighbourhood: there, closest-triangle cells are thinner than a voxel and the
+///     wavefront may have missed a voxel's closest triangle by a few hundredths of a voxel, which
+///     shows in the flux (the centre of a sphere). Per leaf, the block's triangles become bits
+///     of a word (up to 64 distinct ones; else per octant of the leaf, else one voxel at a time)
+///     and a voxel's neighbourhood is the union of 5 x 5 x 5 words.
+void refine_medial_voxels(const LeafTable& table, const std::vector<LeafBits>& known,
+                          const std::vector<LeafBits>& seeds, std::vector<LeafBits> medial,
+                          const std::int32_t* ids, const std::vector<TriangleF>& tris, float h) {
+  const NeighbourOffsets offsets;
+  mark_medial_seeds(table, known, seeds, ids, tris, offsets, medial);
   const std::vector<LeafBits> wide = dilate_bits(table, dilate_bits(table, medial));
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_leaves, 16),
+  tbb::enumerable_thread_specific<TriangleSlots> slots(TriangleSlots(tris.size()));
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, table.leaves.size(), 16),
                     [&](const tbb::blocked_range<std::size_t>& range) {
-    constexpr int kN = 12;  // block side: the leaf and a halo of 2
-    std::vector<std::int32_t> block(kN * kN * kN);
-    // Per block voxel of a window, the bit of its triangle among the window's distinct ones;
-    // their unions over 5 neighbours along z, then over 5 x 5 in y and z.
-    std::vector<std::uint64_t> bit(kN * kN * kN), along_z(kN * kN * 8), along_yz(kN * 8 * 8);
-    std::int32_t distinct[64];
-    std::int32_t cand[124];
-    TriangleSlots& map = slots.local();
-    // Lowers the voxels `todo` of the leaf's cube [o, o + n)^3 (n = 8 or 4) by the triangles of
-    // their 5^3 neighbourhoods, taken as unions of bit words; false (nothing done) when the
-    // cube's window [o - 2, o + n + 2)^3 holds more than 64 distinct triangles.
-    auto by_words = [&](FloatLeaf& leaf, const LeafBits& todo, int ox, int oy, int oz, int n) {
-      const int w = n + 4;  // window side
-      map.clear();
-      int n_distinct = 0;
-      for (int x = 0; x < w; ++x)
-        for (int y = 0; y < w; ++y) {
-          const std::int32_t* src = &block[std::size_t(((ox + x) * kN + oy + y) * kN + oz)];
-          std::uint64_t* dst = &bit[std::size_t((x * w + y) * w)];
-          std::int32_t previous = -1;
-          std::uint64_t previous_bit = 0;
-          for (int z = 0; z < w; ++z) {
-            const std::int32_t id = src[z];
-            if (id != previous && id >= 0) {
-              previous = id;
-              previous_bit = map.bit(id, distinct, n_distinct);
-              if (!previous_bit) return false;
-            }
-            dst[z] = id >= 0 ? previous_bit : 0;
-          }
-        }
-      for (int x = 0; x < w; ++x)
-        for (int y = 0; y < w; ++y)
-          for (int z = 0; z < n; ++z) {
-            const std::uint64_t* row = &bit[std::size_t((x * w + y) * w + z)];
-            along_z[std::size_t((x * w + y) * n + z)] = row[0] | row[1] | row[2] | row[3] | row[4];
-          }
-      for (int x = 0; x < w; ++x)
-        for (int y = 0; y < n; ++y)
-          for (int z = 0; z < n; ++z) {
-            const std::uint64_t* col = &along_z[std::size_t((x * w + y) * n + z)];
-            along_yz[std::size_t((x * n + y) * n + z)] =
-                col[0] | col[n] | col[2 * n] | col[3 * n] | col[4 * n];
-          }
-      const std::uint64_t z_mask = ((std::uint64_t(1) << n) - 1) << oz;
-      for (int x = 0; x < n; ++x)
-        for (int y = 0; y < n; ++y) {
-          for (std::uint64_t bits = (todo[ox + x] >> (8 * (oy + y))) & z_mask; bits;
-               bits &= bits - 1) {
-            const int z = __builtin_ctzll(bits) - oz;
-            const std::uint64_t* sheet = &along_yz[std::size_t((x * n + y) * n + z)];
-            const int nn = n * n;
-            std::uint64_t around =
-                sheet[0] | sheet[nn] | sheet[2 * nn] | sheet[3 * nn] | sheet[4 * nn];
-            around &= ~bit[std::size_t(((x + 2) * w + y + 2) * w + z + 2)];
-            int nc = 0;
-            for (; around; around &= around - 1) cand[nc++] = distinct[__builtin_ctzll(around)];
-            lower(leaf, ox + x, oy + y, oz + z, cand, nc);
-          }
-        }
-      return true;
-    };
+    NeighbourhoodRefiner refiner(tris, h, offsets, slots.local());
     for (std::size_t li = range.begin(); li < range.end(); ++li) {
       LeafBits todo = wide[li];
       for (int x = 0; x < 8; ++x) todo[x] &= known[li][x];
       if (!any_bit(todo)) continue;
-      FloatLeaf& leaf = *table.leaves[li];
-      gather_ids_block<2>(known, table.neighbours[li], ids, block.data());
-      if (by_words(leaf, todo, 0, 0, 0, 8)) continue;
-      // Many small triangles: the leaf's octants, else voxel by voxel.
-      for (int octant = 0; octant < 8; ++octant) {
-        const int ox = 4 * (octant >> 2), oy = 4 * (octant >> 1 & 1), oz = 4 * (octant & 1);
-        if (by_words(leaf, todo, ox, oy, oz, 4)) continue;
-        for (int x = ox; x < ox + 4; ++x)
-          for (std::uint64_t bits = todo[x] & (std::uint64_t(0x0f0f0f0f) << (8 * oy + oz));
-               bits; bits &= bits - 1) {
-            const int b = __builtin_ctzll(bits), y = b >> 3, z = b & 7;
-            const int c = ((x + 2) * kN + y + 2) * kN + z + 2;
-            const std::int32_t own = block[std::size_t(c)];
-            map.clear();
-            int nc = 0;
-            for (int k : off2) {
-              const std::int32_t id = block[std::size_t(c + k)];
-              if (id < 0 || id == own || map.stamp[std::size_t(id)] == map.now) continue;
-              map.stamp[std::size_t(id)] = map.now;
-              cand[nc++] = id;
-            }
-            lower(leaf, x, y, z, cand, nc);
-          }
-      }
+      gather_ids_block<2>(known, table.neighbours[li], ids, refiner.block());
+      refiner.refine_leaf(*table.leaves[li], todo);
     }
   });
 }
+
 }  // namespace fields_detail
 }  // namespace vdb_shell
