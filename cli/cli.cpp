@@ -286,13 +286,13 @@ struct RunOutcome {
 
 /// The one-line summary of a shell on stderr.
 std::string summary_line(const std::string& output, const ShellResult& r, double seconds) {
-  const std::size_t* count = r.traces.count;
   return output + ": " + std::to_string(r.counts.tets) + " tets from " +
          std::to_string(r.input.stats.faces) + " faces, coverage " + fmt(r.quality.coverage) +
          ", quality min " + fmt(r.quality.min_quality) + " median " +
-         fmt(r.quality.median_quality) + ", stops critical " + std::to_string(count[0]) +
-         " merge " + std::to_string(count[1]) + " flux " + std::to_string(count[2]) + " cap " +
-         std::to_string(count[3]) + ", " + fmt(seconds) + " s";
+         fmt(r.quality.median_quality) + ", stops critical " + std::to_string(r.traces.stops(StopReason::kCritical)) + " merge " +
+         std::to_string(r.traces.stops(StopReason::kMerge)) + " flux " +
+         std::to_string(r.traces.stops(StopReason::kFlux)) + " cap " +
+         std::to_string(r.traces.stops(StopReason::kCap)) + ", " + fmt(seconds) + " s";
 }
 
 /// Runs the whole pipeline on `opt.input` (options already checked). Prints the summary to `out`

@@ -53,11 +53,11 @@ auto in_arena(int threads, const Body& body) {
                ".vdb input, a lower --adaptivity); nothing was written";
     throw InputError(message.str());
   }
-  if (!valid.folded_vertices.empty()) {
-    const std::uint32_t v = valid.folded_vertices.front();
+  if (valid.stalled && !valid.on_surface.empty()) {  // the failure is likely near them
+    const std::uint32_t v = valid.on_surface.front();
     const Vec3d& p = mesh.points[v];
     std::ostringstream message;
-    const std::size_t n = valid.folded_vertices.size();
+    const std::size_t n = valid.on_surface.size();
     message << surface.source << ": " << n
             << (n == 1 ? " surface vertex is" : " surface vertices are")
             << " folded: the incident faces have no common inward direction (first: vertex " << v
@@ -272,10 +272,10 @@ std::string report_json(const ShellResult& r, const ReportFiles& files, double r
                 {"planar_vertices",
                  std::count(traces.planar.begin(), traces.planar.end(), std::uint8_t{1})},
                 {"samples", traces.samples.size()}};
-  j["stop_reasons"] = {{"critical", traces.count[0]},
-                       {"merge", traces.count[1]},
-                       {"flux", traces.count[2]},
-                       {"cap", traces.count[3]}};
+  j["stop_reasons"] = {{"critical", traces.stops(StopReason::kCritical)},
+                       {"merge", traces.stops(StopReason::kMerge)},
+                       {"flux", traces.stops(StopReason::kFlux)},
+                       {"cap", traces.stops(StopReason::kCap)}};
   if (!r.traces_only) {
     const ShellCheckResult& checks = r.checks;
     const ShellCounts& c = r.counts;

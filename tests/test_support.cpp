@@ -13,6 +13,9 @@
 #include <map>
 #include <sstream>
 #include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
 
 namespace vdb_shell::test {
 namespace fs = std::filesystem;
@@ -86,7 +89,81 @@ double winding_number(const SurfaceMesh& s, const Vec3d& p) {
     const double den = la * lb * lc + dot(a, b) * lc + dot(b, c) * la + dot(c, a) * lb;
     sum += 2.0 * std::atan2(num, den);
   }
-  return sum / (4.0 * M_PI);
+  return sum / (4.0 * kPi);
+}
+
+/// Signed volume enclosed by the triangles of `s`, times 6.
+double enclosed_volume6(const SurfaceMesh& s) {
+  double sum = 0;
+  for (const Triangle& t : s.triangles) {
+    const Vec3d& a = s.points[t[0]];
+    const Vec3d& b = s.points[t[1]];
+    const Vec3d& c = s.points[t[2]];
+    sum += a.x * (b.y * c.z - b.z * c.y) - a.y * (b.x * c.z - b.z * c.x) +
+           a.z * (b.x * c.y - b.y * c.x);
+  }
+  return sum;
+}
+
+/// The first pair (t, u) of positive tets where a sample point of t (its centroid, and the
+/// midpoints between the centroid and each corner) lies strictly inside u, or {-1, -1}. Tets are
+/// found through a uniform grid of their bounding boxes over the shell's box.
+std::pair<long, long> first_overlap(const TetMesh& shell) {
+  const std::size_t count = shell.tets.size();
+  if (count < 2) return {-1, -1};
+  Vec3d lo = shell.points[shell.tets[0][0]], hi = lo;
+  for (const Tet& k : shell.tets)
+    for (std::uint32_t i : k) {
+      const Vec3d& p = shell.points[i];
+      lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+      hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+    }
+  const int n = std::clamp(static_cast<int>(std::cbrt(static_cast<double>(count))), 1, 64);
+  const Vec3d extent = hi - lo;
+  auto cell_of = [&](double x, double l, double e) {
+    return e > 0 ? std::clamp(static_cast<int>((x - l) / e * n), 0, n - 1) : 0;
+  };
+  auto cell = [&](const Vec3d& p) {
+    return std::array<int, 3>{cell_of(p.x, lo.x, extent.x), cell_of(p.y, lo.y, extent.y),
+                              cell_of(p.z, lo.z, extent.z)};
+  };
+  std::vector<std::vector<std::uint32_t>> grid(static_cast<std::size_t>(n) * n * n);
+  auto slot = [&](int x, int y, int z) { return (static_cast<std::size_t>(z) * n + y) * n + x; };
+  for (std::size_t t = 0; t < count; ++t) {
+    const Tet& k = shell.tets[t];
+    std::array<int, 3> a = cell(shell.points[k[0]]), b = a;
+    for (int c = 1; c < 4; ++c) {
+      const std::array<int, 3> q = cell(shell.points[k[c]]);
+      for (int d = 0; d < 3; ++d) a[d] = std::min(a[d], q[d]), b[d] = std::max(b[d], q[d]);
+    }
+    for (int z = a[2]; z <= b[2]; ++z)
+      for (int y = a[1]; y <= b[1]; ++y)
+        for (int x = a[0]; x <= b[0]; ++x)
+          grid[slot(x, y, z)].push_back(static_cast<std::uint32_t>(t));
+  }
+  // Strictly inside: every barycentric coordinate above a margin far beyond rounding.
+  auto strictly_inside = [&](const Vec3d& p, const Tet& k) {
+    const Vec3d& a = shell.points[k[0]];
+    const Vec3d& b = shell.points[k[1]];
+    const Vec3d& c = shell.points[k[2]];
+    const Vec3d& d = shell.points[k[3]];
+    const double v = signed_volume6(a, b, c, d), margin = 1e-6 * v;
+    return signed_volume6(p, b, c, d) > margin && signed_volume6(a, p, c, d) > margin &&
+           signed_volume6(a, b, p, d) > margin && signed_volume6(a, b, c, p) > margin;
+  };
+  for (std::size_t t = 0; t < count; ++t) {
+    const Tet& k = shell.tets[t];
+    const Vec3d centroid = (shell.points[k[0]] + shell.points[k[1]] + shell.points[k[2]] +
+                            shell.points[k[3]]) * 0.25;
+    for (int s = 0; s < 5; ++s) {
+      const Vec3d p = s == 0 ? centroid : (centroid + shell.points[k[s - 1]]) * 0.5;
+      const std::array<int, 3> c = cell(p);
+      for (std::uint32_t u : grid[slot(c[0], c[1], c[2])])
+        if (u != t && strictly_inside(p, shell.tets[u]))
+          return {static_cast<long>(t), static_cast<long>(u)};
+    }
+  }
+  return {-1, -1};
 }
 
 double nearest_vertex_distance(const SurfaceMesh& s, const Vec3d& p) {
@@ -99,6 +176,11 @@ double nearest_vertex_distance(const SurfaceMesh& s, const Vec3d& p) {
 }  // namespace
 
 std::string independent_shell_problems(const SurfaceMesh& surface, const TetMesh& shell) {
+  auto same_cycle = [](const std::array<std::uint32_t, 3>& a, const Triangle& b) {
+    for (int r = 0; r < 3; ++r)
+      if (a[r] == b[0] && a[(r + 1) % 3] == b[1] && a[(r + 2) % 3] == b[2]) return true;
+    return false;
+  };
   std::ostringstream problem;
   const std::size_t n = surface.points.size();
   if (shell.points.size() < n) return "fewer points than the surface has";
@@ -131,15 +213,16 @@ std::string independent_shell_problems(const SurfaceMesh& surface, const TetMesh
       std::array<std::uint32_t, 3> key = f;
       std::sort(key.begin(), key.end());
       auto& entry = faces[key];
-      ++entry.first;
-      entry.second = f;
+      if (++entry.first == 1) {
+        entry.second = f;  // the first tet's copy
+      } else if (entry.first > 2 || same_cycle(entry.second, {f[0], f[1], f[2]})) {
+        problem << "face (" << key[0] << ", " << key[1] << ", " << key[2] << ") of tet " << t
+                << (entry.first > 2 ? " is shared by more than two tets"
+                                    : " has another tet on the same side");
+        return problem.str();
+      }
     }
   }
-  auto same_cycle = [](const std::array<std::uint32_t, 3>& a, const Triangle& b) {
-    for (int r = 0; r < 3; ++r)
-      if (a[r] == b[0] && a[(r + 1) % 3] == b[1] && a[(r + 2) % 3] == b[2]) return true;
-    return false;
-  };
   for (std::size_t f = 0; f < surface.triangles.size(); ++f) {
     const Triangle& t = surface.triangles[f];
     std::array<std::uint32_t, 3> key = {t[0], t[1], t[2]};
@@ -149,6 +232,11 @@ std::string independent_shell_problems(const SurfaceMesh& surface, const TetMesh
       problem << "surface triangle " << f << " is not the outward face of exactly one tet";
       return problem.str();
     }
+  }
+  const auto [t, u] = first_overlap(shell);
+  if (t >= 0) {
+    problem << "tets " << t << " and " << u << " overlap";
+    return problem.str();
   }
   // Inner points: inside, or within a hair of the surface (a vertex kept on it).
   const double diag = bounding_box(surface).diagonal();
@@ -161,6 +249,60 @@ std::string independent_shell_problems(const SurfaceMesh& surface, const TetMesh
     return problem.str();
   }
   return "";
+}
+
+double independent_coverage(const SurfaceMesh& surface, const TetMesh& shell) {
+  const double enclosed = enclosed_volume6(surface);
+  if (enclosed == 0) return 0;
+  double volume = 0;
+  for (const Tet& k : shell.tets)
+    volume += signed_volume6(shell.points[k[0]], shell.points[k[1]], shell.points[k[2]],
+                             shell.points[k[3]]);
+  return volume / enclosed;
+}
+
+namespace {
+
+/// The rows of a TetGen table without comments ('#' to the end of the line) and blank lines.
+std::vector<std::vector<std::string>> tetgen_rows(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot read " + path);
+  std::vector<std::vector<std::string>> rows;
+  for (std::string line; std::getline(in, line);) {
+    std::istringstream words(line.substr(0, line.find('#')));
+    std::vector<std::string> row;
+    for (std::string w; words >> w;) row.push_back(w);
+    if (!row.empty()) rows.push_back(row);
+  }
+  if (rows.empty() || static_cast<long long>(rows.size()) != std::stoll(rows[0][0]) + 1)
+    throw std::runtime_error(path + ": the row count differs from the header's");
+  return rows;
+}
+
+}  // namespace
+
+TetMesh read_tetgen_shell(const std::string& ele_path) {
+  const fs::path ele(ele_path);
+  const fs::path node = fs::path(ele).replace_extension(".node");
+  const auto nodes = tetgen_rows(node.string());
+  const auto eles = tetgen_rows(ele.string());
+  TetMesh mesh;
+  const long long first = nodes.size() > 1 ? std::stoll(nodes[1].at(0)) : 0;
+  for (std::size_t r = 1; r < nodes.size(); ++r)
+    mesh.points.push_back(
+        {std::stod(nodes[r].at(1)), std::stod(nodes[r].at(2)), std::stod(nodes[r].at(3))});
+  for (std::size_t r = 1; r < eles.size(); ++r) {
+    Tet k{};
+    for (int c = 0; c < 4; ++c) {
+      const long long i = std::stoll(eles[r].at(c + 1)) - first;
+      if (i < 0 || i >= static_cast<long long>(mesh.points.size()))
+        throw std::runtime_error(ele_path + ": node index out of range in row " +
+                                 std::to_string(r));
+      k[c] = static_cast<std::uint32_t>(i);
+    }
+    mesh.tets.push_back(k);
+  }
+  return mesh;
 }
 
 }  // namespace vdb_shell::test

@@ -1,5 +1,6 @@
 // test_support.h — shared helpers of the test suite: temporary folders, the shared mesh corpus,
-// running the built executables.
+// running the built executables, reading a TetGen shell back, and checks of a shell computed here
+// without core/'s checks.
 #pragma once
 
 #include <filesystem>
@@ -50,8 +51,20 @@ void write_text(const std::string& path, const std::string& text);
 
 /// Checks a shell against its surface with computations of its own (none of core/'s checks):
 /// the surface's points come first, unchanged; T <= 3F; every tet's signed volume is positive;
-/// every surface triangle is the outward face of exactly one tet; every other point lies inside
-/// the surface (winding number > 1/2) or on it. Returns "" or the first problem found.
+/// every surface triangle is the outward face of exactly one tet; no face is shared by more than
+/// two tets, and two tets sharing a face lie on opposite sides of it; no two tets overlap (the
+/// centroid of each tet and the midpoints between it and the corners lie strictly inside no
+/// other tet); every other point lies inside the surface (winding number > 1/2) or on it.
+/// Returns "" or the first problem found.
 std::string independent_shell_problems(const SurfaceMesh& surface, const TetMesh& shell);
+
+/// Shell volume / enclosed volume, both computed here: the sum of the tets' signed volumes over
+/// the volume the surface's triangles enclose (divergence theorem). 0 for an empty surface.
+double independent_coverage(const SurfaceMesh& surface, const TetMesh& shell);
+
+/// The points and tets of a TetGen .node/.ele pair (`ele_path` names the .ele; the .node is
+/// beside it), read by a parser of its own; 0- or 1-based, as the .node's first index says.
+/// \throw std::runtime_error when either file is missing or malformed.
+TetMesh read_tetgen_shell(const std::string& ele_path);
 
 }  // namespace vdb_shell::test

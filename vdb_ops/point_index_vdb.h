@@ -1,5 +1,5 @@
 // point_index_vdb.h — the merge queries' point index over OpenVDB's tools::PointIndexGrid (the
-// paper's spatial hashing, DESIGN step 5).
+// paper's spatial hashing; the trace stage's merges, docs/architecture.md).
 //
 // Implements core's PointIndex (core/trace/point_index.h); no OpenVDB header is included here. The
 // points are bucketed into a PointIndexGrid with cubic voxels of edge `radius` (world units);

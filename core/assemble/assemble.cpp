@@ -182,7 +182,6 @@ AssembleResult assemble_shell(const SurfaceMesh& surface, const ShellInput& inpu
     }
     result.dropped_degenerate_tets += static_cast<std::size_t>(prism.dropped);
   }
-  result.tets = mesh.tets.size();
   if (options.compute_quality) mesh.quality = tet_qualities(mesh);
   result.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -1,5 +1,4 @@
-// assemble.h — building the tet shell from the surface and its traced inner vertices
-// (design step 6).
+// assemble.h — building the tet shell from the surface and its traced inner vertices.
 //
 // Every input triangle (a, b, c) and the inner vertices (a', b', c') of its corners span a
 // prism, split into 3 tets without Steiner points by the rule of Dompierre, Labbe, Vallet and
@@ -33,26 +32,9 @@
 #include "core/base/surface_mesh.h"
 #include "core/base/tet_mesh.h"
 #include "core/base/vec3.h"
+#include "core/inner/inner.h"
 
 namespace vdb_shell {
-
-/// The inner side of the shell: where every surface vertex ended its inward trace.
-struct ShellInput {
-  /// Inner vertex positions, world units. Several surface vertices may share one (welded).
-  std::vector<Vec3d> inner_points;
-  /// Per surface vertex v: index into inner_points of v's inner vertex, or kOnSurface. Size
-  /// num_vertices().
-  std::vector<std::uint32_t> inner_id;
-  /// Faces whose three corners are kOnSurface, each with one extra inner point below it: the
-  /// face's prism is the single tet from the face to that point (ascending faces).
-  std::vector<std::uint32_t> cap_faces;
-  std::vector<Vec3d> cap_points;  ///< one per cap face, after inner_points in the tet mesh
-};
-
-/// inner_id of a vertex that is its own inner vertex: the shell has zero thickness there and its
-/// prisms become pyramids (two tets) or, with two such corners, one tet. A face with three such
-/// corners has no prism, unless it is a cap face (ShellInput::cap_faces).
-constexpr std::uint32_t kOnSurface = 0xFFFFFFFFu;
 
 struct AssembleOptions {
   /// Fill TetMesh::quality with the volume-length ratio of every tet (quality.h).
@@ -65,7 +47,6 @@ struct AssembleResult {
   /// tets: positive when their prism is not inverted; source_triangle and (optionally)
   /// quality per tet; inner (1 for inner points) and thickness per point.
   TetMesh mesh;
-  std::size_t tets = 0;                     ///< mesh.tets.size(), <= 3 * faces
   std::size_t dropped_degenerate_tets = 0;  ///< tets with a repeated vertex, dropped
   std::size_t collapsed_prisms = 0;         ///< prisms whose three inner vertices are one
   std::size_t on_surface_vertices = 0;      ///< surface vertices with inner_id kOnSurface

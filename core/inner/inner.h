@@ -1,5 +1,5 @@
 // inner.h — from traces to the inner vertices of the shell: thickness limits and welding
-// (DESIGN steps 5-6, the paper's Fig. 12 and its post-processing).
+// (the paper's Fig. 12 and its post-processing).
 //
 // Each surface vertex v gets the point of its own trace at arc length
 //     min(end arc, max_thickness, edge_factor * mean length of v's incident edges)
@@ -12,12 +12,30 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
-#include "core/assemble/assemble.h"
 #include "core/trace/trace.h"
 
 namespace vdb_shell {
+
+/// The inner side of the shell: where every surface vertex ended its inward trace.
+struct ShellInput {
+  /// Inner vertex positions, world units. Several surface vertices may share one (welded).
+  std::vector<Vec3d> inner_points;
+  /// Per surface vertex v: index into inner_points of v's inner vertex, or kOnSurface. Size
+  /// num_vertices().
+  std::vector<std::uint32_t> inner_id;
+  /// Faces whose three corners are kOnSurface, each with one extra inner point below it: the
+  /// face's prism is the single tet from the face to that point (ascending faces).
+  std::vector<std::uint32_t> cap_faces;
+  std::vector<Vec3d> cap_points;  ///< one per cap face, after inner_points in the tet mesh
+};
+
+/// inner_id of a vertex that is its own inner vertex: the shell has zero thickness there and its
+/// prisms become pyramids (two tets) or, with two such corners, one tet. A face with three such
+/// corners has no prism, unless it is a cap face (ShellInput::cap_faces).
+constexpr std::uint32_t kOnSurface = 0xFFFFFFFFu;
 
 struct ThicknessOptions {
   double max_thickness = 0.0;   ///< world units, along the trace; 0: no global limit

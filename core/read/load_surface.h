@@ -1,7 +1,7 @@
 // load_surface.h — turning a file's polygons into a closed, 2-manifold, outward triangle surface.
 //
-// Every rule of the design card is checked and reported by name with its first offending
-// elements (indices, 0-based, and positions): NaN/Inf coordinates, out-of-range indices,
+// Every rule of a closed 2-manifold surface is checked and reported by name with its first
+// offending elements (indices, 0-based, and positions): NaN/Inf coordinates, out-of-range indices,
 // polygons with fewer than three corners, degenerate (zero-area) and duplicate faces, boundary
 // edges, non-manifold edges and vertices, inconsistent orientation. Several components are
 // allowed. A surface whose enclosed volume is negative (normals pointing in) is flipped and a

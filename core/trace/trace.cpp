@@ -401,7 +401,7 @@ TraceResult trace_paths(const SurfaceMesh& mesh, const FieldSampler& fields,
   resolve_merges(r, planar, all, make_index);
   r.seconds_merging = seconds_since(t0);
 
-  for (StopReason s : r.stop) ++r.count[static_cast<int>(s)];
+  for (StopReason s : r.stop) ++r.stop_count[static_cast<std::size_t>(s)];
   return r;
 }
 

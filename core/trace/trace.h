@@ -1,4 +1,5 @@
-// trace.h — vertex classification and path tracing (paper §2, Fig. 6; DESIGN steps 3-5).
+// trace.h — vertex classification and path tracing (paper §2, Fig. 6; the trace stage of
+// docs/architecture.md).
 //
 // Every surface vertex p is traced inward, q <- q - step * g with g = grad(phi)(q) normalised
 // only when |g| > 1 (eq. 1, 2, 4, 5), or with a higher-order integrator of the same field.
@@ -19,6 +20,7 @@
 // writes only its own slot: the result is identical for any thread count.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -77,7 +79,7 @@ struct TraceResult {
   std::vector<std::int64_t> merged_with;  ///< per trace: the other vertex, or -1
 
   TraceParameters parameters;
-  std::size_t count[4] = {0, 0, 0, 0};  ///< traces per StopReason
+  std::array<std::size_t, 4> stop_count{};  ///< traces per StopReason (see stops())
   double seconds_tracing = 0;
   double seconds_merging = 0;
 
@@ -86,6 +88,10 @@ struct TraceResult {
   const Vec3d& sample(std::size_t v, std::size_t i) const { return samples[offsets[v] + i]; }
   const Vec3d& end_point(std::size_t v) const { return sample(v, end[v]); }
   double end_arc(std::size_t v) const { return arc_length[offsets[v] + end[v]]; }
+  /// How many traces stopped for `reason`.
+  std::size_t stops(StopReason reason) const {
+    return stop_count[static_cast<std::size_t>(reason)];
+  }
 };
 
 /// Traces every vertex of `mesh` through `fields` and resolves merges. Reports the fraction of

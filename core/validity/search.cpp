@@ -575,7 +575,7 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
       const ShellCheckResult c = check_shell(surface, assemble_shell(surface, in, no_quality).mesh);
       out.floor_valid = c.valid();
       if (!out.floor_valid) out.floor_problems = describe_problems(c);
-      out.folded_vertices = search.folded();
+      out.stalled = true;
       break;
     }
     search.faces_around(lowered, seeds);
@@ -591,7 +591,6 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
     ShellCheckOptions o;
     out.checks = check_shell(surface, out.shell.mesh, o);
   }
-  out.depth = s.t;
   out.on_surface = search.folded();
   out.cap_faces = search.caps();
   double sum = 0;

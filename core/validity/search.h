@@ -1,4 +1,4 @@
-// search.h — the thickest valid shell (DESIGN "What the literal method gives"; issue 6).
+// search.h — the thickest valid shell along the traces (docs/validity.md).
 //
 // Unknowns: t_v, the arc length at which surface vertex v's inner vertex sits on its own trace
 // (0 = on the surface, full = the trace's end after thickness limits). Conditions: every tet of
@@ -58,7 +58,6 @@ struct ValidityOptions {
 
 struct ValidShell {
   ShellInput input;               ///< final inner vertices (compact, order-preserving)
-  std::vector<double> depth;      ///< per surface vertex: final arc length t_v, world units
   AssembleResult shell;           ///< the assembled shell
   ShellCheckResult checks;        ///< checks of the final shell (valid() unless floor fails)
   int rounds = 0;                 ///< rounds of the moving-back search
@@ -67,6 +66,9 @@ struct ValidShell {
   double moved_back_mean = 0;     ///< mean (traced - final) / traced over moved-back vertices
   std::size_t unwelded = 0;       ///< vertices that left their weld
   std::size_t floor_drops = 0;    ///< floors lowered where the floor itself offended
+  /// The search stopped with only elements at their floors offending (the floors as low as they
+  /// go): `checks` is then invalid, and floor_valid says whether the floor configuration failed.
+  bool stalled = false;
   bool floor_valid = true;        ///< false: the search stalled and the floor failed too
   std::string floor_problems;     ///< what the floor configuration broke, when it did
   /// Folded surface vertices kept on the surface (inner_id kOnSurface, depth 0): their incident
@@ -77,8 +79,6 @@ struct ValidShell {
   /// Faces whose three corners are folded: their prism is one tet to a cap point at the floor
   /// depth below the face (ShellInput::cap_faces).
   std::size_t cap_faces = 0;
-  /// When the search stalled: every folded vertex (the failure is likely near them).
-  std::vector<std::uint32_t> folded_vertices;
   double seconds = 0;             ///< the search, without the final full check (checks.seconds)
 };
 

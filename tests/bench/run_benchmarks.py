@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""run_benchmarks.py -- the vdb_shell benchmark suite in one command (issue 8).
+"""run_benchmarks.py -- the vdb_shell benchmark suite in one command.
 
 Not part of the ctest run. Runs the built binaries as child processes, prints Markdown tables on
 stdout and writes OUT/results.md and OUT/results.json (every raw number, every run):
@@ -21,8 +21,9 @@ Sections (--sections, comma-separated; default all):
   threads  the same two meshes at --thread-resolution with -j 1 and -j 2 (alternating): per-stage
            medians and speed-ups.
   peers    TetGen (tetgen -pQ and -pqQ) on the table1 and meshes surfaces: wall time, tets, min and
-           median volume-length quality (vdb_shell's formula, core/assemble/quality.cpp), beside vdb_shell.
-  targets  (always) the issue's targets, met or missed by how much; nothing is asserted.
+           median volume-length quality (vdb_shell's formula, core/assemble/quality.cpp),
+           beside vdb_shell.
+  targets  (always) the performance targets, met or missed by how much; nothing is asserted.
 
 --quick: 1 run per point, scaling at 64 and 128 on fandisk only, threads at 128 (about 1-2
 minutes on 2 cores): for trying the driver out, not for numbers.
@@ -87,7 +88,7 @@ TABLE1_JOBS = [("box", 1), ("box", 2), ("cylinder", 1), ("cylinder", 2), ("point
                ("star", 1), ("horn", 1), ("tube", 1), ("sphere", 1), ("propeller", 1),
                ("funnel", 1), ("bowl", 1)]
 
-# Targets of issue 8.
+# The performance targets (reported by the targets section, never asserted).
 TARGET_TABLE1_S = 0.5
 TARGET_FLOOR_RATIO_512 = 2.0
 TARGET_1024_S = 60.0
@@ -425,9 +426,14 @@ def tet_quality(points, tets):
     return q
 
 
+def ratio_text(ratio):
+    """'2.57x', or '' when there is no ratio."""
+    return "%sx" % fmt(ratio, 2) if ratio else ""
+
+
 def quality_summary(q):
-    """min and median like core/assemble/quality.cpp summarize_quality (median of an even count is the
-    mean of the two middle values, as numpy's)."""
+    """min and median like core/assemble/quality.cpp summarize_quality (median of an even count is
+    the mean of the two middle values, as numpy's)."""
     if len(q) == 0:
         return {"tets": 0, "min": None, "median": None, "mean": None, "non_positive": 0}
     return {"tets": int(len(q)), "min": float(np.min(q)), "median": float(np.median(q)),
@@ -747,8 +753,9 @@ class Suite:
                 if paper else None
             p = c["paper"] or {}
             if not c["ok"]:
-                rows.append([c["label"], fmt(faces), fmt(p.get("F")), failure_text(c), fmt(p.get("T")),
-                             "", "", fmt(p.get("time_s"), 2), "", fmt(p.get("point_size"), 4),
+                rows.append([c["label"], fmt(faces), fmt(p.get("F")), failure_text(c),
+                             fmt(p.get("T")), "", "", fmt(p.get("time_s"), 2), "",
+                             fmt(p.get("point_size"), 4),
                              "", fmt(p.get("step"), 4), "", "", "", "", ""])
                 continue
             rows.append([c["label"], fmt(faces), fmt(p.get("F")), fmt(get(r, "shell", "tets")),
@@ -954,8 +961,9 @@ class Suite:
                     floors[0]["error"] if floors else "not run")
                 tot = (case.get("timings_median_s") or {}).get("total")
                 fld = (case.get("timings_median_s") or {}).get("fields")
-                case["ratio_total_floor"] = tot / case["floor_s"] if tot and case["floor_s"] else None
-                case["ratio_fields_floor"] = fld / case["floor_s"] if fld and case["floor_s"] else None
+                floor_s = case["floor_s"]
+                case["ratio_total_floor"] = tot / floor_s if tot and floor_s else None
+                case["ratio_fields_floor"] = fld / floor_s if fld and floor_s else None
                 cases.append(case)
                 self.save()
         self.render_scaling()
@@ -985,8 +993,7 @@ class Suite:
                         [fmt(t.get("total"), 2), fmt(c["wall_s"], 2),
                          fmt(kib_to_mib(c["maxrss_kib"]), 0), floor,
                          fmt(kib_to_mib(c["floor_maxrss_kib"]), 0),
-                         "%sx" % fmt(c["ratio_total_floor"], 2) if c["ratio_total_floor"] else "",
-                         "%sx" % fmt(c["ratio_fields_floor"], 2) if c["ratio_fields_floor"] else ""])
+                         ratio_text(c["ratio_total_floor"]), ratio_text(c["ratio_fields_floor"])])
         text = ["## Scaling: time per stage, peak memory, ratio to the meshToLevelSet floor", "",
                 "Stage columns: the report's timings_s (median over the runs, all threads); "
                 "peak MiB: the process's maximum RSS (wait4). floor: vdb_shell_bench_fields "
@@ -1186,8 +1193,9 @@ class Suite:
         text = ["## Peers: TetGen on the same surfaces", "",
                 "time s: wall time of the process (vdb_shell: median over its runs; TetGen: one "
                 "run, including its file output). Q: volume-length ratio 6 sqrt(2) V / l_rms^3, "
-                "computed here for TetGen with vdb_shell's formula (core/assemble/quality.cpp), which is "
-                "checked against vdb_shell's own reports (quality formula check lines).", "",
+                "computed here for TetGen with vdb_shell's formula (core/assemble/quality.cpp), "
+                "which is checked against vdb_shell's own reports (quality formula check lines).",
+                "",
                 md_table(["mesh", "F", "method", "T", "time s", "min Q", "median Q", "peak MiB"],
                          rows)]
         self.emit("\n".join(text))
@@ -1321,7 +1329,7 @@ class Suite:
                     status="failed" if bad else None)
         else:
             add("trace speed-up 1 -> 2 threads", "", ">= 1.8x", None, "threads not run")
-        text = ["## Targets (issue 8; reported, never asserted)", "",
+        text = ["## Targets (reported, never asserted)", "",
                 md_table(["target", "measured", "limit", "status", "margin"], rows)]
         if self.args.quick:
             text += ["", "--quick: low resolutions and single runs; not a measurement of the "

@@ -1,18 +1,29 @@
-// trace_bench.cpp — path tracing and merge resolution (core/trace/trace.h) on OpenVDB fields: traces
-// per second and total trace time with 1 and 2 threads, beside the field build time of the same
-// run.
+// trace_bench.cpp — path tracing and merge resolution (core/trace/trace.h) on OpenVDB fields:
+// traces per second and total trace time with 1 and 2 threads, beside the field build time of the
+// same run; with --straightness, how straight each integrator keeps traces that are straight in
+// the exact field.
 //
 // Not part of the test run. Usage:
 //   vdb_shell_bench_traces [--no-large] [MESH[@RESOLUTION] ...]
+//   vdb_shell_bench_traces --straightness
 // Without MESH: the Table 1 shapes (assets/shapes.h, detail 1) at 128^3, then at 512^3
 // ../shared/meshes/fandisk.obj and make_shape("box", 46) (101,568 faces); --no-large skips the
 // two 512^3 runs. Each mesh's fields are built once (all threads); each thread count then traces
 // it once with the default options (RK2, hash-grid point index). "trace" is the integration,
 // "merge" the merge resolution; traces/s = traces / (trace + merge). The 2-thread result is
 // checked byte for byte against the 1-thread one. Prints Markdown.
+//
+// --straightness: the box (2x2 per face: every vertex on an axis of symmetry, so its trace runs
+// straight to the centre) and the cylinder at detail 2 (cap centres down the axis, side vertices
+// at mid-height straight to the axis), each axis-aligned and rotated by 20 degrees about x then
+// 30 about z (so the grid shares none of their symmetries), at 128^3: the largest distance of any
+// sample from its trace's straight line, in voxels, for Euler, RK2 and RK4 at the default step
+// (half a voxel) and at 2 voxels. tests/vdb_ops/trace_vdb_test.cpp bounds the same figures.
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -24,8 +35,9 @@
 #include <vector>
 
 #include "assets/shapes.h"
-#include "core/trace/trace.h"
+#include "core/base/vec3.h"
 #include "core/read/load_surface.h"
+#include "core/trace/trace.h"
 #include "vdb_ops/fields.h"
 
 namespace vdb_shell {
@@ -77,10 +89,91 @@ void run(const Job& job) {
                 threads, r->seconds_tracing, r->seconds_merging, total,
                 total > 0 ? static_cast<double>(r->num_traces()) / total : 0.0,
                 speed_up,
-                r->count[0], r->count[1], r->count[2], r->count[3],
+                r->stops(StopReason::kCritical), r->stops(StopReason::kMerge),
+                r->stops(StopReason::kFlux), r->stops(StopReason::kCap),
                 static_cast<double>(r->samples.size()) / static_cast<double>(r->num_traces()),
                 threads == 1 ? "" : (identical(one, two) ? "yes" : "NO"));
     std::fflush(stdout);
+  }
+}
+
+/// A trace that is a straight segment in the exact field: vertex v, along `direction` (unit).
+struct StraightTrace {
+  std::size_t vertex;
+  Vec3d direction;
+};
+
+/// Largest distance (voxels) of any sample, up to the end, from the straight line of each trace.
+double largest_deviation(const TraceResult& r, const std::vector<StraightTrace>& straight,
+                         double voxel) {
+  double worst = 0;
+  for (const StraightTrace& s : straight) {
+    const Vec3d& p = r.sample(s.vertex, 0);
+    for (std::size_t i = 1; i <= r.end[s.vertex]; ++i) {
+      const Vec3d d = r.sample(s.vertex, i) - p;
+      worst = std::max(worst, norm(d - dot(d, s.direction) * s.direction) / voxel);
+    }
+  }
+  return worst;
+}
+
+/// Rotation by `deg_z` degrees about z after `deg_x` degrees about x.
+Vec3d rotated(const Vec3d& p, double deg_x, double deg_z) {
+  const double ax = deg_x * kPi / 180.0, az = deg_z * kPi / 180.0;
+  const Vec3d q(p.x, std::cos(ax) * p.y - std::sin(ax) * p.z,
+                std::sin(ax) * p.y + std::cos(ax) * p.z);
+  return {std::cos(az) * q.x - std::sin(az) * q.y, std::sin(az) * q.x + std::cos(az) * q.y, q.z};
+}
+
+void run_straightness() {
+  struct Case {
+    std::string name;
+    SurfaceMesh mesh;
+    std::vector<StraightTrace> straight;
+  };
+  std::vector<Case> cases;
+  for (const bool rotate : {false, true}) {
+    Case box{rotate ? "box, rotated" : "box", make_shape("box", 1), {}};
+    for (std::size_t v = 0; v < box.mesh.points.size(); ++v)
+      box.straight.push_back({v, normalized(-box.mesh.points[v])});
+    cases.push_back(std::move(box));
+  }
+  for (const bool rotate : {false, true}) {
+    Case cylinder{rotate ? "cylinder, rotated" : "cylinder", make_shape("cylinder", 2), {}};
+    for (std::size_t v = 0; v < cylinder.mesh.points.size(); ++v) {
+      const Vec3d& p = cylinder.mesh.points[v];
+      const double rho = std::hypot(p.x, p.y);
+      if (rho < 1e-12 && std::fabs(p.z) > 0.5 - 1e-12)
+        cylinder.straight.push_back({v, {0, 0, p.z > 0 ? -1.0 : 1.0}});
+      else if (std::fabs(p.z) < 1e-12 && std::fabs(rho - 0.5) < 1e-9)
+        cylinder.straight.push_back({v, normalized(Vec3d(-p.x, -p.y, 0))});
+    }
+    cases.push_back(std::move(cylinder));
+  }
+  for (Case& c : cases) {
+    if (c.name.find("rotated") == std::string::npos) continue;
+    for (Vec3d& p : c.mesh.points) p = rotated(p, 20.0, 30.0);
+    for (StraightTrace& s : c.straight) s.direction = rotated(s.direction, 20.0, 30.0);
+  }
+  std::printf("| shape | straight traces | step, voxels | Euler | RK2 | RK4 |\n"
+              "|---|---|---|---|---|---|\n");
+  for (const Case& c : cases) {
+    FieldOptions options;
+    options.resolution = 128;
+    const std::unique_ptr<Fields> fields = build_fields(c.mesh, options);
+    const double voxel = fields->voxel_size();
+    for (const double step_voxels : {0.5, 2.0}) {
+      std::printf("| %s | %zu | %g |", c.name.c_str(), c.straight.size(), step_voxels);
+      for (const Integrator integ : {Integrator::kEuler, Integrator::kRk2, Integrator::kRk4}) {
+        TraceOptions trace;
+        trace.integrator = integ;
+        trace.step = step_voxels * voxel;
+        const TraceResult r = trace_paths(c.mesh, *fields, trace);
+        std::printf(" %.3f |", largest_deviation(r, c.straight, voxel));
+      }
+      std::printf("\n");
+      std::fflush(stdout);
+    }
   }
 }
 
@@ -97,6 +190,10 @@ int main(int argc, char** argv) {
       if (arg == "--no-large") {
         large = false;
         continue;
+      }
+      if (arg == "--straightness") {
+        run_straightness();
+        return 0;
       }
       int res = 128;
       const auto at = arg.rfind('@');

@@ -21,6 +21,7 @@
 
 #include "assets/shapes.h"
 #include "cli/cli.h"
+#include "core/read/load_surface.h"
 #include "core/write/shell_writers.h"
 #include "tests/test_support.h"
 #include "vdb_ops/fields.h"
@@ -156,9 +157,12 @@ const std::vector<ReportCase>& report_cases() {
 }
 
 TEST_F(CliOptionEffects, ReportShowsEveryFieldTracingAndShellOption) {
+  const SurfaceMesh surface = load_surface(star()).mesh;
   for (const ReportCase& c : report_cases()) {
     SCOPED_TRACE(c.option);
-    std::vector<std::string> args = {star(), "-o", file("s.vtu")};
+    // The shell as a TetGen pair, read back by test_support's own parser and checked there.
+    const std::string ele = file("s.ele");
+    std::vector<std::string> args = {star(), "-o", ele};
     if (c.option != "--resolution" && c.option != "--voxel-size")
       args.insert(args.end(), {"-r", "32"});
     args.insert(args.end(), c.args.begin(), c.args.end());
@@ -166,7 +170,9 @@ TEST_F(CliOptionEffects, ReportShowsEveryFieldTracingAndShellOption) {
     ASSERT_EQ(r.code, 0) << r.err;
     ASSERT_FALSE(r.report.is_null()) << r.out;
     c.expect(base(), r.report);
-    EXPECT_TRUE(r.report["shell"]["valid"].get<bool>());
+    const TetMesh shell = test::read_tetgen_shell(ele);
+    EXPECT_EQ(shell.tets.size(), r.report["shell"]["tets"].get<std::size_t>());
+    EXPECT_EQ(test::independent_shell_problems(surface, shell), "");
   }
 }
 
@@ -327,8 +333,8 @@ TEST_F(CliOptionEffects, GridSelectsTheNamedGrid) {
   ASSERT_EQ(made.exit_code, 0) << made.err;
   std::map<std::string, double> volume;
   for (const char* name : {"small", "big"}) {
-    const CliRun r = cli({two, "-o", file(std::string(name) + ".vtu"), "--adaptivity", "0.5", "--grid",
-                       name});
+    const CliRun r =
+        cli({two, "-o", file(std::string(name) + ".vtu"), "--adaptivity", "0.5", "--grid", name});
     ASSERT_EQ(r.code, 0) << name << ": " << r.err;
     volume[name] = r.report["input"]["enclosed_volume"].get<double>();
   }

@@ -1,4 +1,4 @@
-// writers_test.cpp — tests of core/write/shell_writers.h and core/write/atomic_file.h.
+// shell_writers_test.cpp — core/write/shell_writers.h and core/write/atomic_file.h.
 //
 // Every tet-mesh format is read back by a real reader (meshio through /usr/bin/python3; the
 // TetGen triple also by a small parser here and by ../shared/eval/check_shell.py): the tet count,
@@ -20,9 +20,9 @@
 #include <string>
 #include <vector>
 
-#include "core/write/atomic_file.h"
 #include "core/base/errors.h"
 #include "core/base/tet_mesh.h"
+#include "core/write/atomic_file.h"
 #include "core/write/shell_writers.h"
 #include "tests/test_support.h"
 

@@ -1,22 +1,19 @@
-// assemble_test.cpp — the prism split (all 720 index orders, welding), whole shells on closed
-// surfaces (conformity, orientation, boundary faces, T == 3F), and the quality measures with
-// their analytic values (regular tet, flat tet, coverage of a scaled cube).
+// assemble_test.cpp — assemble_shell() and split_prism() (core/assemble/assemble.h): the prism
+// split (all 720 index orders, welding), whole shells on closed surfaces (conformity,
+// orientation, boundary faces, T == 3F), surface vertices and cap faces, inconsistent input.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <map>
-#include <numeric>
-#include <random>
 #include <set>
 #include <utility>
 
 #include "assets/shapes.h"
 #include "core/assemble/assemble.h"
-#include "core/base/errors.h"
-#include "core/inner/inner.h"
 #include "core/assemble/quality.h"
+#include "core/base/errors.h"
 #include "core/validity/shell_checks.h"
 
 namespace vdb_shell {
@@ -89,8 +86,7 @@ std::map<Key, int> face_counts(const TetMesh& m) {
 void expect_conforming_shell(const SurfaceMesh& s, const ShellInput& in,
                              const AssembleResult& r) {
   const std::size_t n = s.points.size();
-  EXPECT_EQ(r.tets, 3 * s.num_faces());
-  EXPECT_EQ(r.mesh.tets.size(), r.tets);
+  EXPECT_EQ(r.mesh.tets.size(), 3 * s.num_faces());
   for (const Tet& t : r.mesh.tets) EXPECT_GT(volume(r.mesh, t), 0.0);
   std::map<Key, int> count = face_counts(r.mesh);
   std::set<Key> boundary;
@@ -288,7 +284,7 @@ TEST(Assemble, AllInnerVerticesWeldedGiveOneTetPerPrism) {
     const ShellInput in = centroid_input(s);
     const AssembleResult r = assemble_shell(s, in);
     const std::size_t n = s.points.size();
-    EXPECT_EQ(r.tets, s.num_faces());
+    EXPECT_EQ(r.mesh.tets.size(), s.num_faces());
     EXPECT_EQ(r.collapsed_prisms, s.num_faces());
     EXPECT_EQ(r.dropped_degenerate_tets, 2 * s.num_faces());
     EXPECT_EQ(r.welded_inner_vertices, n - 1);
@@ -334,7 +330,7 @@ TEST(Assemble, VerticesOnTheSurfaceTurnPrismsIntoPyramidsAndTets) {
     EXPECT_EQ(per_face[f], 3 - on) << "face " << f;
     expected += static_cast<std::size_t>(3 - on);
   }
-  EXPECT_EQ(r.tets, expected);
+  EXPECT_EQ(r.mesh.tets.size(), expected);
   EXPECT_EQ(r.dropped_degenerate_tets, 3 * s.num_faces() - expected);
   // Conforming, every surface face a boundary face, no vertex 0 or 2 thickness.
   const ShellCheckResult c = check_shell(s, r.mesh);
@@ -377,49 +373,6 @@ TEST(Assemble, CapFaceIsOneTetToItsCapPoint) {
   EXPECT_THROW(assemble_shell(s, in), InputError);
 }
 
-TEST(Inner, WeldingJoinsTheSmallestEarlierRepresentativeWithinTolerance) {
-  // Straight two-sample traces ending at random points, in a crowd (most ends within the
-  // tolerance of many others) and spread out; the result must be the greedy rule, brute force.
-  std::mt19937 rng(7);
-  for (const double spread : {0.3, 3.0}) {
-    const std::uint32_t n = 600;
-    std::uniform_real_distribution<double> u(-spread, spread);
-    SurfaceMesh mesh;
-    TraceResult traces;
-    traces.parameters.point_size = 1.0;
-    traces.offsets.push_back(0);
-    for (std::uint32_t v = 0; v < n; ++v) {
-      const Vec3d start{10.0 + v, 0, 0}, end{u(rng), u(rng), u(rng)};
-      mesh.points.push_back(start);
-      traces.samples.insert(traces.samples.end(), {start, end});
-      traces.arc_length.insert(traces.arc_length.end(), {0.0, distance(start, end)});
-      traces.end.push_back(1);
-      traces.offsets.push_back(static_cast<std::uint32_t>(traces.samples.size()));
-    }
-    const InnerVertices inner = place_inner_vertices(mesh, traces, ThicknessOptions{});
-    const double tol = 0.5;  // half the point size
-    std::vector<std::uint32_t> rep(n);
-    std::size_t welded = 0;
-    for (std::uint32_t v = 0; v < n; ++v) {
-      rep[v] = v;
-      for (std::uint32_t w = 0; w < v; ++w)
-        if (rep[w] == w && distance(traces.end_point(w), traces.end_point(v)) <= tol) {
-          rep[v] = w;
-          ++welded;
-          break;
-        }
-    }
-    EXPECT_EQ(inner.welded, welded) << "spread " << spread;
-    if (spread < 1.0) {
-      EXPECT_GT(welded, n / 2);
-    }
-    for (std::uint32_t v = 0; v < n; ++v)
-      EXPECT_EQ(inner.input.inner_id[v], inner.input.inner_id[rep[v]]) << v;
-    std::set<std::uint32_t> distinct(inner.input.inner_id.begin(), inner.input.inner_id.end());
-    EXPECT_EQ(distinct.size(), n - welded);
-  }
-}
-
 TEST(Assemble, UnusedInnerPointsAreKeptAndCounted) {
   const SurfaceMesh s = octahedron();
   ShellInput in = scaled_input(s, 0.5);
@@ -427,7 +380,7 @@ TEST(Assemble, UnusedInnerPointsAreKeptAndCounted) {
   const AssembleResult r = assemble_shell(s, in);
   EXPECT_EQ(r.unused_inner_points, 1u);
   EXPECT_EQ(r.mesh.points.size(), 13u);
-  EXPECT_EQ(r.tets, 24u);
+  EXPECT_EQ(r.mesh.tets.size(), 24u);
 }
 
 TEST(Assemble, RejectsInconsistentInput) {
@@ -438,67 +391,6 @@ TEST(Assemble, RejectsInconsistentInput) {
   in = scaled_input(s, 0.5);
   in.inner_id[2] = 6;
   EXPECT_THROW(assemble_shell(s, in), InputError);
-}
-
-// ---------------------------------------------------------------------------------------------
-
-TEST(Quality, RegularTetIsOne) {
-  const Vec3d a{1, 1, 1}, b{1, -1, -1}, c{-1, 1, -1}, d{-1, -1, 1};
-  const double sign = tet_volume(a, b, c, d) > 0.0 ? 1.0 : -1.0;
-  EXPECT_NEAR(tet_quality(a, b, c, d), sign, 1e-12);
-  EXPECT_NEAR(tet_quality(a, b, d, c), -sign, 1e-12);
-  const double regular_dihedral_deg = std::acos(1.0 / 3.0) * 180.0 / 3.14159265358979323846;
-  EXPECT_NEAR(tet_min_dihedral_deg(a, b, c, d), regular_dihedral_deg, 1e-9);
-  // Scale and translation do not matter.
-  const Vec3d o{10, -3, 7};
-  EXPECT_NEAR(tet_quality(o + a * 1e-3, o + b * 1e-3, o + c * 1e-3, o + d * 1e-3), sign, 1e-9);
-}
-
-TEST(Quality, FlatTetIsZero) {
-  const Vec3d a{0, 0, 0}, b{1, 0, 0}, c{0, 1, 0}, d{1, 1, 0};
-  EXPECT_EQ(tet_quality(a, b, c, d), 0.0);
-  EXPECT_EQ(tet_min_dihedral_deg(a, b, c, d), 0.0);
-  EXPECT_EQ(tet_quality(a, a, a, a), 0.0);
-  // The corner tet of the unit cube: V = 1/6, l_rms^2 = (3 + 3 * 2) / 6.
-  const double q = tet_quality(a, b, c, Vec3d{0, 0, 1});
-  EXPECT_NEAR(q, 6.0 * std::sqrt(2.0) / 6.0 / std::pow(1.5, 1.5), 1e-12);
-}
-
-TEST(Quality, CoverageOfScaledCube) {
-  // Cube [-0.5, 0.5]^3, inner cube half as large: shell volume 1 - 1/8.
-  const SurfaceMesh s = make_shape("box", 2);
-  const AssembleResult r = assemble_shell(s, scaled_input(s, 0.5));
-  const QualitySummary q = summarize_quality(s, r.mesh);
-  EXPECT_EQ(q.tets, r.tets);
-  EXPECT_NEAR(q.enclosed_volume, 1.0, 1e-12);
-  EXPECT_NEAR(q.shell_volume, 0.875, 1e-12);
-  EXPECT_NEAR(q.coverage, 0.875, 1e-12);
-  EXPECT_EQ(q.non_positive, 0u);
-  ASSERT_EQ(q.histogram.size(), 10u);
-  EXPECT_EQ(std::accumulate(q.histogram.begin(), q.histogram.end(), std::size_t{0}), q.tets);
-  EXPECT_GT(q.min_quality, 0.0);
-  EXPECT_LE(q.min_quality, q.median_quality);
-  EXPECT_LE(q.median_quality, 1.0);
-  EXPECT_GT(q.mean_quality, 0.0);
-  EXPECT_GT(q.min_dihedral_deg, 0.0);
-  EXPECT_LT(q.min_dihedral_deg, 70.6);
-}
-
-TEST(Quality, HistogramBinsAndStatistics) {
-  TetMesh m;
-  m.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-  m.tets = {{0, 1, 2, 3}, {0, 1, 3, 2}, {0, 1, 2, 3}};
-  m.quality = {1.0, -0.5, 0.05};  // used as given
-  SurfaceMesh s;
-  const QualitySummary q = summarize_quality(s, m);
-  EXPECT_EQ(q.non_positive, 1u);
-  EXPECT_EQ(q.histogram[9], 1u);
-  EXPECT_EQ(q.histogram[0], 1u);
-  EXPECT_DOUBLE_EQ(q.min_quality, -0.5);
-  EXPECT_DOUBLE_EQ(q.median_quality, 0.05);
-  EXPECT_DOUBLE_EQ(q.mean_quality, 0.55 / 3.0);
-  EXPECT_NEAR(q.shell_volume, 1.0 / 6.0, 1e-15);
-  EXPECT_EQ(q.coverage, 0.0);  // no enclosed volume
 }
 
 }  // namespace

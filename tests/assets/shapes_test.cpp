@@ -12,6 +12,7 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
+#include <ostream>
 #include <set>
 #include <string>
 #include <utility>
@@ -19,21 +20,29 @@
 
 #include "assets/shapes.h"
 #include "core/base/errors.h"
-#include "core/read/polygon_soup.h"
 #include "core/base/surface_mesh.h"
+#include "core/base/vec3.h"
 #include "core/read/load_surface.h"
+#include "core/read/polygon_soup.h"
 #include "tests/test_support.h"
 
 namespace vdb_shell {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 struct Expected {
   const char* name;
   int genus;
   int paper_faces;  ///< Table 1 of the paper; 0 when the paper has no such shape
 };
+
+/// GetParam() in test listings and failure messages: "horn (genus 0, paper 408 faces)".
+void PrintTo(const Expected& e, std::ostream* os) {
+  *os << e.name << " (genus " << e.genus << ", ";
+  if (e.paper_faces > 0)
+    *os << "paper " << e.paper_faces << " faces)";
+  else
+    *os << "not in the paper)";
+}
 
 const Expected kExpected[] = {
     {"box", 0, 48},   {"cylinder", 0, 48}, {"sphere", 0, 760},     {"tube", 1, 512},

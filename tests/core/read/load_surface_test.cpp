@@ -1,5 +1,6 @@
-// validate_test.cpp — every rule of the surface validator on tiny hand-made meshes, the readers
-// on every format, and the shared mesh corpus classified as its README says.
+// load_surface_test.cpp — core/read/load_surface.h and core/read/polygon_soup.h: every rule of
+// the surface validator on tiny hand-made meshes, the readers on every format, and the shared
+// mesh corpus classified as its README says.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -8,8 +9,8 @@
 #include <string>
 
 #include "core/base/errors.h"
-#include "core/read/polygon_soup.h"
 #include "core/read/load_surface.h"
+#include "core/read/polygon_soup.h"
 #include "tests/test_support.h"
 
 namespace vdb_shell {
@@ -184,10 +185,13 @@ TEST(Validate, GenusOfATorusLikeBlock) {
   for (int j = 0; j < 3; ++j)
     for (int i = 0; i < 3; ++i) {
       if (i == 1 && j == 1) continue;
-      soup.polygons.push_back({vid(i, j, 0), vid(i, j + 1, 0), vid(i + 1, j + 1, 0), vid(i + 1, j, 0)});
-      soup.polygons.push_back({vid(i, j, 1), vid(i + 1, j, 1), vid(i + 1, j + 1, 1), vid(i, j + 1, 1)});
+      soup.polygons.push_back(
+          {vid(i, j, 0), vid(i, j + 1, 0), vid(i + 1, j + 1, 0), vid(i + 1, j, 0)});
+      soup.polygons.push_back(
+          {vid(i, j, 1), vid(i + 1, j, 1), vid(i + 1, j + 1, 1), vid(i, j + 1, 1)});
     }
-  auto wall = [&](int i0, int j0, int i1, int j1) {  // outward = right of (i0,j0)->(i1,j1) seen from +z
+  // Outward = right of (i0, j0) -> (i1, j1) seen from +z.
+  auto wall = [&](int i0, int j0, int i1, int j1) {
     soup.polygons.push_back({vid(i0, j0, 0), vid(i1, j1, 0), vid(i1, j1, 1), vid(i0, j0, 1)});
   };
   for (int i = 0; i < 3; ++i) { wall(i, 0, i + 1, 0); wall(i + 1, 3, i, 3); }
@@ -244,10 +248,14 @@ TEST(Readers, AsciiStlOffPlyAgree) {
   TempDir dir;
   write_text(dir.file("t.stl"),
              "solid t\n"
-             "facet normal 0 0 -1\nouter loop\nvertex 0 0 0\nvertex 0 1 0\nvertex 1 0 0\nendloop\nendfacet\n"
-             "facet normal 0 -1 0\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 0 1\nendloop\nendfacet\n"
-             "facet normal 1 1 1\nouter loop\nvertex 1 0 0\nvertex 0 1 0\nvertex 0 0 1\nendloop\nendfacet\n"
-             "facet normal -1 0 0\nouter loop\nvertex 0 1 0\nvertex 0 0 0\nvertex 0 0 1\nendloop\nendfacet\n"
+             "facet normal 0 0 -1\nouter loop\n"
+             "vertex 0 0 0\nvertex 0 1 0\nvertex 1 0 0\nendloop\nendfacet\n"
+             "facet normal 0 -1 0\nouter loop\n"
+             "vertex 0 0 0\nvertex 1 0 0\nvertex 0 0 1\nendloop\nendfacet\n"
+             "facet normal 1 1 1\nouter loop\n"
+             "vertex 1 0 0\nvertex 0 1 0\nvertex 0 0 1\nendloop\nendfacet\n"
+             "facet normal -1 0 0\nouter loop\n"
+             "vertex 0 1 0\nvertex 0 0 0\nvertex 0 0 1\nendloop\nendfacet\n"
              "endsolid t\n");
   write_text(dir.file("t.off"), "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n"
                                 "3 0 2 1\n3 0 1 3\n3 1 2 3\n3 2 0 3\n");

@@ -1,4 +1,5 @@
-// trace_test.cpp — classification, tracing and merge resolution on exact analytic fields.
+// trace_test.cpp — classification, tracing and merge resolution (core/trace/trace.h) on exact
+// analytic fields (tests/analytic_field.h), without OpenVDB.
 #include <gtest/gtest.h>
 
 #include <tbb/task_arena.h>
@@ -51,7 +52,7 @@ TEST(Trace, SphereTracesEndAtTheCentreWithoutOvershoot) {
     TraceOptions opt;
     opt.integrator = integ;
     const TraceResult r = trace_paths(sphere, *field, opt);
-    EXPECT_EQ(r.count[static_cast<int>(StopReason::kCap)], 0u);
+    EXPECT_EQ(r.stops(StopReason::kCap), 0u);
     for (std::size_t v = 0; v < r.num_traces(); ++v) {
       EXPECT_LT(norm(r.end_point(v)), 2.0 * voxel) << to_string(integ) << " vertex " << v;
       // No sample ever passes the centre by more than a step.
@@ -66,7 +67,7 @@ TEST(Trace, CubeLikeThePaperEndsAtTheCentre) {
   const SurfaceMesh box = make_shape("box", 1);
   const auto field = test::box_field({0.5, 0.5, 0.5}, voxel);
   const TraceResult r = trace_paths(box, *field, TraceOptions{});
-  EXPECT_EQ(r.count[static_cast<int>(StopReason::kCap)], 0u);
+  EXPECT_EQ(r.stops(StopReason::kCap), 0u);
   for (std::size_t v = 0; v < r.num_traces(); ++v)
     EXPECT_LT(norm(r.end_point(v)), 1.5 * voxel) << "vertex " << v << " stop "
                                                   << to_string(r.stop[v]);
@@ -97,11 +98,12 @@ TEST(Trace, FineMeshStillGivesThickTraces) {
   const auto field = test::box_field({0.5, 0.5, 0.5}, voxel);
   const TraceResult r = trace_paths(box, *field, TraceOptions{});
   std::vector<double> depth;
-  for (std::size_t v = 0; v < r.num_traces(); ++v) depth.push_back(-field->probe()->phi(r.end_point(v)));
+  const auto probe = field->probe();
+  for (std::size_t v = 0; v < r.num_traces(); ++v) depth.push_back(-probe->phi(r.end_point(v)));
   std::nth_element(depth.begin(), depth.begin() + depth.size() / 2, depth.end());
   // A vertex at distance d from the nearest edge can reach depth ~d; the median is ~0.15.
   EXPECT_GT(depth[depth.size() / 2], 0.1);
-  EXPECT_EQ(r.count[static_cast<int>(StopReason::kCap)], 0u);
+  EXPECT_EQ(r.stops(StopReason::kCap), 0u);
 }
 
 TEST(Trace, SameResultForAnyThreadCount) {
