@@ -196,7 +196,7 @@ TEST(Pipeline, FieldNoticesReachTheResult) {
     GTEST_SKIP() << "vdb_tool (libopenvdb-tools) not installed";
   TempDir dir;
   const std::string vdb = dir.file("band.vdb");
-  const auto made = run_command("vdb_tool -sphere voxel=0.02 radius=0.5 width=3 name=surface "
+  const auto made = run_command("vdb_tool -sphere voxel=0.04 radius=0.5 width=3 name=surface "
                                 "-write '" + vdb + "'");
   ASSERT_EQ(made.exit_code, 0) << made.err;
   const ShellResult r = build_shell_from_level_set(vdb, ShellOptions());
