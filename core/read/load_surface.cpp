@@ -101,16 +101,27 @@ std::vector<SoupTriangle> fan_triangulate(const PolygonSoup& soup) {
   return tris;
 }
 
-}  // namespace
+/// The triangles of a soup whose indices and coordinates are valid, with names for messages.
+struct SoupFaces {
+  const PolygonSoup& soup;
+  std::vector<SoupTriangle> tris;
 
-std::vector<SurfaceProblem> find_surface_problems(const PolygonSoup& soup,
-                                                  const ValidationOptions& options) {
-  std::vector<SurfaceProblem> problems;
-  const std::size_t max = options.max_listed;
+  std::string face_name(const SoupTriangle& t) const {
+    const bool tri_only = soup.polygons[t.polygon].size() == 3;
+    return (tri_only ? "face " : "polygon ") + std::to_string(t.polygon);
+  }
+  std::string edge_name(std::uint32_t a, std::uint32_t b) const {
+    return "edge (" + std::to_string(a) + ", " + std::to_string(b) + ") at " +
+           fmt_point(soup.points[a]) + "-" + fmt_point(soup.points[b]);
+  }
+};
+
+/// Element-wise rules: finite coordinates, indices in range, at least three corners. Returns
+/// false when indices or coordinates are bad (nothing else is meaningful then).
+bool check_elements(const PolygonSoup& soup, std::size_t max,
+                    std::vector<SurfaceProblem>& problems) {
   const auto& pts = soup.points;
   const std::size_t nv = pts.size();
-
-  // Element-wise rules first: without valid indices and coordinates nothing else is meaningful.
   ProblemCollector bad_coords("NaN/Inf coordinates",
                               "the file holds invalid numbers; re-export the mesh", max);
   for (std::size_t i = 0; i < nv; ++i)
@@ -130,71 +141,60 @@ std::vector<SurfaceProblem> find_surface_problems(const PolygonSoup& soup,
         break;
       }
   }
-  const bool elements_ok =
-      bad_coords.problem.count == 0 && bad_index.problem.count == 0;
+  const bool elements_ok = bad_coords.problem.count == 0 && bad_index.problem.count == 0;
   bad_coords.flush_into(problems);
   bad_index.flush_into(problems);
   short_poly.flush_into(problems);
-  if (!elements_ok) return problems;
+  return elements_ok;
+}
 
-  const std::vector<SoupTriangle> tris = fan_triangulate(soup);
+/// Faces of zero area (a repeated corner, or below the area threshold); marks them.
+void check_degenerate(const SoupFaces& f, const ValidationOptions& options,
+                      ProblemCollector& degenerate, std::vector<char>& is_degenerate) {
+  const auto& pts = f.soup.points;
   BBox box;
   for (const Vec3d& p : pts) box.expand(p);
   const double diag = box.diagonal();
   const double min_twice_area = 2.0 * options.degenerate_area_fraction * diag * diag;
-
-  auto face_name = [&](const SoupTriangle& t) {
-    const bool tri_only = soup.polygons[t.polygon].size() == 3;
-    return (tri_only ? "face " : "polygon ") + std::to_string(t.polygon);
-  };
-  auto edge_name = [&](std::uint32_t a, std::uint32_t b) {
-    return "edge (" + std::to_string(a) + ", " + std::to_string(b) + ") at " + fmt_point(pts[a]) +
-           "-" + fmt_point(pts[b]);
-  };
-
-  // Degenerate and duplicate faces.
-  ProblemCollector degenerate("degenerate (zero-area) faces",
-                              "remove or collapse the zero-area faces", max);
-  std::vector<char> is_degenerate(tris.size(), 0);
-  for (std::size_t t = 0; t < tris.size(); ++t) {
-    const Triangle& v = tris[t].v;
+  is_degenerate.assign(f.tris.size(), 0);
+  for (std::size_t t = 0; t < f.tris.size(); ++t) {
+    const Triangle& v = f.tris[t].v;
     const bool repeated = v[0] == v[1] || v[1] == v[2] || v[0] == v[2];
-    const double twice_area = repeated ? 0.0
-                               : norm(cross(pts[v[1]] - pts[v[0]], pts[v[2]] - pts[v[0]]));
+    const double twice_area =
+        repeated ? 0.0 : norm(cross(pts[v[1]] - pts[v[0]], pts[v[2]] - pts[v[0]]));
     if (repeated || twice_area <= min_twice_area) {
       is_degenerate[t] = 1;
-      degenerate.add(face_name(tris[t]) + " (" + std::to_string(v[0]) + ", " +
+      degenerate.add(f.face_name(f.tris[t]) + " (" + std::to_string(v[0]) + ", " +
                      std::to_string(v[1]) + ", " + std::to_string(v[2]) + ") at " +
                      fmt_point(pts[v[0]]));
     }
   }
-  ProblemCollector duplicate("duplicate faces", "remove the repeated faces", max);
-  {
-    std::vector<std::pair<Triangle, std::uint32_t>> sorted;
-    sorted.reserve(tris.size());
-    for (std::size_t t = 0; t < tris.size(); ++t) {
-      Triangle k = tris[t].v;
-      std::sort(k.begin(), k.end());
-      sorted.push_back({k, static_cast<std::uint32_t>(t)});
-    }
-    std::sort(sorted.begin(), sorted.end());
-    for (std::size_t i = 1; i < sorted.size(); ++i)
-      if (sorted[i].first == sorted[i - 1].first)
-        duplicate.add(face_name(tris[sorted[i].second]) + " repeats " +
-                      face_name(tris[sorted[i - 1].second]));
-  }
+}
 
-  // Edge rules: every edge shared by exactly two faces that traverse it in opposite directions.
-  ProblemCollector boundary("boundary edges (the surface is not closed)",
-                            "close the holes or rebuild a watertight surface", max);
-  ProblemCollector nonmanifold_edge("non-manifold edges (more than two faces on an edge)",
-                                    "remove or separate the extra faces", max);
-  ProblemCollector orientation("inconsistently oriented faces",
-                               "orient all faces coherently (e.g. MeshLab's Re-Orient)", max);
-  const std::vector<EdgeUse> uses = edge_uses(tris);
-  DisjointSets corners(tris.size() * 3);  // fans around each vertex, for the vertex rule
+/// Faces with the same three corners as an earlier one.
+void check_duplicates(const SoupFaces& f, ProblemCollector& duplicate) {
+  std::vector<std::pair<Triangle, std::uint32_t>> sorted;
+  sorted.reserve(f.tris.size());
+  for (std::size_t t = 0; t < f.tris.size(); ++t) {
+    Triangle k = f.tris[t].v;
+    std::sort(k.begin(), k.end());
+    sorted.push_back({k, static_cast<std::uint32_t>(t)});
+  }
+  std::sort(sorted.begin(), sorted.end());
+  for (std::size_t i = 1; i < sorted.size(); ++i)
+    if (sorted[i].first == sorted[i - 1].first)
+      duplicate.add(f.face_name(f.tris[sorted[i].second]) + " repeats " +
+                    f.face_name(f.tris[sorted[i - 1].second]));
+}
+
+/// Edge rules: every edge shared by exactly two faces that traverse it in opposite directions.
+/// Joins, in `corners` (three per triangle), the corners of the two faces of every manifold edge.
+void check_edges(const SoupFaces& f, ProblemCollector& boundary,
+                 ProblemCollector& nonmanifold_edge, ProblemCollector& orientation,
+                 DisjointSets& corners) {
+  const std::vector<EdgeUse> uses = edge_uses(f.tris);
   auto corner_of = [&](std::uint32_t tri, std::uint32_t vertex) {
-    const Triangle& v = tris[tri].v;
+    const Triangle& v = f.tris[tri].v;
     const int k = v[0] == vertex ? 0 : (v[1] == vertex ? 1 : 2);
     return static_cast<std::size_t>(tri) * 3 + static_cast<std::size_t>(k);
   };
@@ -205,39 +205,71 @@ std::vector<SurfaceProblem> find_surface_problems(const PolygonSoup& soup,
     const std::uint32_t a = uses[i].lo, b = uses[i].hi;
     if (a != b) {
       if (count == 1) {
-        boundary.add(edge_name(a, b));
+        boundary.add(f.edge_name(a, b));
       } else if (count > 2) {
-        nonmanifold_edge.add(edge_name(a, b) + " in " + std::to_string(count) + " faces");
+        nonmanifold_edge.add(f.edge_name(a, b) + " in " + std::to_string(count) + " faces");
       } else {
         if (uses[i].forward == uses[i + 1].forward)
-          orientation.add(face_name(tris[uses[i].tri]) + " and " +
-                          face_name(tris[uses[i + 1].tri]) + " along " + edge_name(a, b));
+          orientation.add(f.face_name(f.tris[uses[i].tri]) + " and " +
+                          f.face_name(f.tris[uses[i + 1].tri]) + " along " + f.edge_name(a, b));
         corners.unite(corner_of(uses[i].tri, a), corner_of(uses[i + 1].tri, a));
         corners.unite(corner_of(uses[i].tri, b), corner_of(uses[i + 1].tri, b));
       }
     }
     i = j;
   }
-  // A vertex is manifold when its corners form one fan (one connected set through shared edges).
-  ProblemCollector nonmanifold_vertex("non-manifold vertices (faces meeting only at a vertex)",
-                                      "split the vertex or join the parts along an edge", max);
-  if (nonmanifold_edge.problem.count == 0) {
-    std::vector<std::size_t> first_root(nv, SIZE_MAX);
-    std::vector<char> reported(nv, 0);
-    for (std::size_t t = 0; t < tris.size(); ++t) {
-      if (is_degenerate[t]) continue;
-      for (int k = 0; k < 3; ++k) {
-        const std::uint32_t v = tris[t].v[k];
-        const std::size_t root = corners.find(t * 3 + static_cast<std::size_t>(k));
-        if (first_root[v] == SIZE_MAX) {
-          first_root[v] = root;
-        } else if (first_root[v] != root && !reported[v]) {
-          reported[v] = 1;
-          nonmanifold_vertex.add("vertex " + std::to_string(v) + " at " + fmt_point(pts[v]));
-        }
+}
+
+/// A vertex is manifold when its corners (of non-degenerate faces) form one fan: one connected
+/// set through shared edges.
+void check_vertices(const SoupFaces& f, const std::vector<char>& is_degenerate,
+                    DisjointSets& corners, ProblemCollector& nonmanifold_vertex) {
+  const std::size_t nv = f.soup.points.size();
+  std::vector<std::size_t> first_root(nv, SIZE_MAX);
+  std::vector<char> reported(nv, 0);
+  for (std::size_t t = 0; t < f.tris.size(); ++t) {
+    if (is_degenerate[t]) continue;
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t v = f.tris[t].v[k];
+      const std::size_t root = corners.find(t * 3 + static_cast<std::size_t>(k));
+      if (first_root[v] == SIZE_MAX) {
+        first_root[v] = root;
+      } else if (first_root[v] != root && !reported[v]) {
+        reported[v] = 1;
+        nonmanifold_vertex.add("vertex " + std::to_string(v) + " at " +
+                               fmt_point(f.soup.points[v]));
       }
     }
   }
+}
+
+}  // namespace
+
+std::vector<SurfaceProblem> find_surface_problems(const PolygonSoup& soup,
+                                                  const ValidationOptions& options) {
+  std::vector<SurfaceProblem> problems;
+  const std::size_t max = options.max_listed;
+  if (!check_elements(soup, max, problems)) return problems;
+
+  const SoupFaces faces{soup, fan_triangulate(soup)};
+  ProblemCollector degenerate("degenerate (zero-area) faces",
+                              "remove or collapse the zero-area faces", max);
+  std::vector<char> is_degenerate;
+  check_degenerate(faces, options, degenerate, is_degenerate);
+  ProblemCollector duplicate("duplicate faces", "remove the repeated faces", max);
+  check_duplicates(faces, duplicate);
+  ProblemCollector boundary("boundary edges (the surface is not closed)",
+                            "close the holes or rebuild a watertight surface", max);
+  ProblemCollector nonmanifold_edge("non-manifold edges (more than two faces on an edge)",
+                                    "remove or separate the extra faces", max);
+  ProblemCollector orientation("inconsistently oriented faces",
+                               "orient all faces coherently (e.g. MeshLab's Re-Orient)", max);
+  DisjointSets corners(faces.tris.size() * 3);  // fans around each vertex, for the vertex rule
+  check_edges(faces, boundary, nonmanifold_edge, orientation, corners);
+  ProblemCollector nonmanifold_vertex("non-manifold vertices (faces meeting only at a vertex)",
+                                      "split the vertex or join the parts along an edge", max);
+  if (nonmanifold_edge.problem.count == 0)
+    check_vertices(faces, is_degenerate, corners, nonmanifold_vertex);
 
   boundary.flush_into(problems);
   nonmanifold_edge.flush_into(problems);
