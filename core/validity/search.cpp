@@ -455,6 +455,66 @@ void collect_offenders(const SurfaceMesh& surface, const ShellInput& in,
   tets.erase(std::unique(tets.begin(), tets.end()), tets.end());
 }
 
+/// The prism pairs (f < g, ascending, each once) of the overlapping tet pairs of a check.
+std::vector<std::array<std::uint32_t, 2>> overlapping_prisms(const ShellCheckResult& checks,
+                                                             const TetMesh& mesh) {
+  std::vector<std::array<std::uint32_t, 2>> pairs;
+  for (const auto& pair : checks.first_overlapping_pairs) {
+    const std::uint32_t f = mesh.source_triangle[pair[0]];
+    const std::uint32_t g = mesh.source_triangle[pair[1]];
+    pairs.push_back({std::min(f, g), std::max(f, g)});
+  }
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  return pairs;
+}
+
+/// Moved-back statistics of the final state: vertices below their traced depth (not welded),
+/// and their mean relative step back.
+void count_moved_back(const ShellSearch& search, const State& s, ValidShell& out) {
+  double sum = 0;
+  for (std::uint32_t v = 0; v < s.t.size(); ++v)
+    if (!s.welded[v] && s.t[v] < search.full()[v] * (1.0 - 1e-12)) {
+      ++out.moved_back;
+      sum += (search.full()[v] - s.t[v]) / search.full()[v];
+    }
+  out.moved_back_mean = out.moved_back ? sum / static_cast<double>(out.moved_back) : 0.0;
+}
+
+/// Only elements at the floor offend. Next to a fold of the surface that is sharper than the
+/// floor (a razor-thin fin, typically next to a folded vertex) the floor itself is too thick:
+/// lowers the floors of the offenders' vertices (the overlapping prisms', the offending tets'
+/// and slots' members), a bounded number of times each. Returns whether any floor was lowered.
+bool drop_floors(ShellSearch& search, State& s, const SurfaceMesh& surface, const TetMesh& mesh,
+                 const std::vector<std::array<std::uint32_t, 2>>& prism_pairs,
+                 const std::vector<std::uint32_t>& bad_tets,
+                 const std::vector<std::uint32_t>& bad_slots, const Lists& members,
+                 std::uint32_t n_slots, const ValidityOptions& options,
+                 std::vector<char>& lowered, std::size_t& floor_drops) {
+  const std::uint32_t n = static_cast<std::uint32_t>(surface.points.size());
+  bool dropped = false;
+  auto drop = [&](std::uint32_t v) {
+    if (lowered[v] || s.t[v] == 0 ||
+        !search.lower_floor(v, options.floor_drop, options.max_floor_drops))
+      return;
+    lowered[v] = 1;
+    s.t[v] = search.floor()[v];
+    ++floor_drops;
+    dropped = true;
+  };
+  for (const auto& [f, g] : prism_pairs)
+    for (const std::uint32_t face : {f, g})
+      for (const std::uint32_t v : surface.triangles[face]) drop(v);
+  for (std::uint32_t t : bad_tets)
+    for (std::uint32_t p : mesh.tets[t])
+      if (p >= n && p - n < n_slots)
+        for (std::uint32_t v : members[p - n]) drop(v);
+  for (std::uint32_t slot : bad_slots)
+    if (slot < n_slots)
+      for (std::uint32_t v : members[slot]) drop(v);
+  return dropped;
+}
+
 }  // namespace
 
 ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& traces,
@@ -503,14 +563,7 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
     monitor.report(0.9 * (1.0 - offenders / first_offenders));
     std::fill(lowered.begin(), lowered.end(), 0);
     // Overlapping prisms, pair by pair: each is stepped back until it is apart.
-    prism_pairs.clear();
-    for (const auto& pair : out.checks.first_overlapping_pairs) {
-      const std::uint32_t f = out.shell.mesh.source_triangle[pair[0]];
-      const std::uint32_t g = out.shell.mesh.source_triangle[pair[1]];
-      prism_pairs.push_back({std::min(f, g), std::max(f, g)});
-    }
-    std::sort(prism_pairs.begin(), prism_pairs.end());
-    prism_pairs.erase(std::unique(prism_pairs.begin(), prism_pairs.end()), prism_pairs.end());
+    prism_pairs = overlapping_prisms(out.checks, out.shell.mesh);
     out.unwelded += search.settle_overlaps(s, prism_pairs, options.shrink, check_options,
                                            options.min_quality, lowered);
     bool progress = std::find(lowered.begin(), lowered.end(), 1) != lowered.end();
@@ -546,28 +599,8 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
     for (std::uint32_t slot : bad_slots)
       if (slot_depth(slot) > 0) lower(slot);
     if (!progress) {
-      // Only elements at the floor offend. Next to a fold of the surface that is sharper than
-      // the floor (a razor-thin fin, typically next to a folded vertex) the floor itself is too
-      // thick: lower the floors of the offenders' vertices, a bounded number of times each.
-      auto drop = [&](std::uint32_t v) {
-        if (lowered[v] || s.t[v] == 0 || !search.lower_floor(v, options.floor_drop,
-                                                              options.max_floor_drops))
-          return;
-        lowered[v] = 1;
-        s.t[v] = search.floor()[v];
-        ++out.floor_drops;
-        progress = true;
-      };
-      for (const auto& [f, g] : prism_pairs)
-        for (const std::uint32_t face : {f, g})
-          for (const std::uint32_t v : surface.triangles[face]) drop(v);
-      for (std::uint32_t t : bad_tets)
-        for (std::uint32_t p : out.shell.mesh.tets[t])
-          if (p >= n && p - n < n_slots)
-            for (std::uint32_t v : members[p - n]) drop(v);
-      for (std::uint32_t slot : bad_slots)
-        if (slot < n_slots)
-          for (std::uint32_t v : members[slot]) drop(v);
+      progress = drop_floors(search, s, surface, out.shell.mesh, prism_pairs, bad_tets,
+                             bad_slots, members, n_slots, options, lowered, out.floor_drops);
     }
     if (!progress) {
       // The floors are as low as they go: the floor configuration itself must be invalid.
@@ -593,13 +626,7 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
   }
   out.on_surface = search.folded();
   out.cap_faces = search.caps();
-  double sum = 0;
-  for (std::uint32_t v = 0; v < n; ++v)
-    if (!s.welded[v] && s.t[v] < search.full()[v] * (1.0 - 1e-12)) {
-      ++out.moved_back;
-      sum += (search.full()[v] - s.t[v]) / search.full()[v];
-    }
-  out.moved_back_mean = out.moved_back ? sum / static_cast<double>(out.moved_back) : 0.0;
+  count_moved_back(search, s, out);
   ++out.checks_run;  // the final full check
   return out;
 }
