@@ -433,18 +433,9 @@ int run(CliOptions opt, std::ostream& out, std::ostream& err) {
   return opt.batch() ? run_batch(opt, out, err) : run_single(opt, out, err);
 }
 
-int run_cli_impl(int argc, const char* const* argv, std::ostream& out, std::ostream& err,
-                 bool err_is_terminal) {
-  CLI::App app{"vdb_shell: turns a closed triangle surface (OBJ, OFF, PLY, STL) into a volumetric\n"
-               "shell of tetrahedra by tracing every vertex inward through a signed distance\n"
-               "field (\"Volumetric Shells using Path Tracing\"). Without -o it validates the\n"
-               "input and prints its summary.",
-               "vdb_shell"};
-  app.option_defaults()->always_capture_default();
-  app.get_formatter()->column_width(40);
-
-  CliOptions opt;
-  opt.err_is_terminal = err_is_terminal;
+/// The option registry: every option with its default, group and help text (--help prints them
+/// from here; docs/usage.md lists them with units).
+void register_options(CLI::App& app, CliOptions& opt) {
   const char* in = "Input";
   app.add_option("INPUT", opt.inputs,
                  "Surface mesh file(s) (.obj .off .ply .stl), or a level set (.vdb) meshed at "
@@ -548,6 +539,21 @@ int run_cli_impl(int argc, const char* const* argv, std::ostream& out, std::ostr
   app.add_option("-j,--threads", opt.shell.threads, "Worker threads (0: all cores)")
       ->check(CLI::NonNegativeNumber)
       ->group("Performance");
+}
+
+int run_cli_impl(int argc, const char* const* argv, std::ostream& out, std::ostream& err,
+                 bool err_is_terminal) {
+  CLI::App app{"vdb_shell: turns a closed triangle surface (OBJ, OFF, PLY, STL) into a volumetric\n"
+               "shell of tetrahedra by tracing every vertex inward through a signed distance\n"
+               "field (\"Volumetric Shells using Path Tracing\"). Without -o it validates the\n"
+               "input and prints its summary.",
+               "vdb_shell"};
+  app.option_defaults()->always_capture_default();
+  app.get_formatter()->column_width(40);
+
+  CliOptions opt;
+  opt.err_is_terminal = err_is_terminal;
+  register_options(app, opt);
   app.set_version_flag("--version", std::string("vdb_shell ") + VDB_SHELL_VERSION);
 
   try {
