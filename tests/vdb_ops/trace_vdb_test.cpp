@@ -24,6 +24,7 @@
 #include "core/trace/trace.h"
 #include "vdb_ops/fields.h"
 #include "vdb_ops/point_index_vdb.h"
+#include "tests/straight_traces.h"
 
 namespace vdb_shell {
 namespace {
@@ -317,33 +318,9 @@ TEST(TraceVdb, FineMeshStillGivesThickTraces) {
 
 // --- straightness: Euler versus Runge-Kutta ----------------------------------------------------
 
-/// A trace that is a straight segment in the exact field: vertex v, along `direction` (unit).
-struct StraightTrace {
-  std::size_t vertex;
-  Vec3d direction;
-};
-
-/// Largest distance (voxels) of any sample, up to the end, from the straight line of each trace.
-double largest_deviation(const TraceResult& r, const std::vector<StraightTrace>& straight,
-                         double voxel) {
-  double worst = 0;
-  for (const StraightTrace& s : straight) {
-    const Vec3d& p = r.sample(s.vertex, 0);
-    for (std::size_t i = 1; i <= r.end[s.vertex]; ++i) {
-      const Vec3d d = r.sample(s.vertex, i) - p;
-      worst = std::max(worst, norm(d - dot(d, s.direction) * s.direction) / voxel);
-    }
-  }
-  return worst;
-}
-
-/// Rotation by `deg_z` degrees about z after `deg_x` degrees about x.
-Vec3d rotated(const Vec3d& p, double deg_x, double deg_z) {
-  const double ax = deg_x * kPi / 180.0, az = deg_z * kPi / 180.0;
-  const Vec3d q(p.x, std::cos(ax) * p.y - std::sin(ax) * p.z,
-                std::sin(ax) * p.y + std::cos(ax) * p.z);
-  return {std::cos(az) * q.x - std::sin(az) * q.y, std::sin(az) * q.x + std::cos(az) * q.y, q.z};
-}
+using test::StraightTrace;
+using test::largest_deviation;
+using test::rotated;
 
 TEST(TraceVdb, RungeKuttaTracesStayAsStraightAsEuler) {
   // Traces that are straight segments in the exact field:
