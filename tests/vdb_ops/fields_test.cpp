@@ -174,6 +174,23 @@ TEST(FieldsSphere, WavefrontInteriorMatchesMeshToVolumeInterior) {
   EXPECT_LT(sum / double(n), 0.01) << "voxels (mean)";
 }
 
+TEST(FieldsSphere, FastSweepingInteriorIsFirstOrder) {
+  // SdfMethod::kFastSweeping (a narrow band, then OpenVDB's dilateSdf into the interior): exact
+  // near the surface, within a few voxels deep inside, and every interior voxel active.
+  FieldOptions options;
+  options.resolution = 48;
+  options.sdf_method = SdfMethod::kFastSweeping;
+  const auto sweeping = build_fields(sphere_mesh(), options);
+  EXPECT_NE(sweeping->stats().strategy.find("fast sweeping"), std::string::npos);
+  const double h = sweeping->voxel_size();
+  auto probe = sweeping->probe();
+  EXPECT_NEAR(probe->phi({0, 0, 0}), -kRadius, 3.0 * h);
+  EXPECT_NEAR(probe->phi({0.45, 0, 0}), -0.05, 0.5 * h);
+  EXPECT_GT(probe->flux({0, 0, 0}), 0.5);  // the centre is the medial point
+  EXPECT_GT(sweeping->stats().interior_voxels,
+            static_cast<std::size_t>(0.9 * 4.0 / 3.0 * kPi * std::pow(kRadius / h, 3)));
+}
+
 TEST(FieldsSphere, MeshVerticesOnZeroLevel) {
   const Fields& fields = sphere_fields();
   auto probe = fields.probe();
