@@ -8,6 +8,7 @@
 #include <limits>
 #include <numeric>
 
+#include "core/base/index_lists.h"
 #include "core/assemble/quality.h"
 
 namespace vdb_shell {
@@ -42,29 +43,6 @@ Vec3d most_inward_direction(const std::vector<Vec3d>& normals, Vec3d start) {
 /// First directions with a smaller inward margin (sine of the angle to the nearest incident
 /// face plane) are bent towards the most inward direction.
 constexpr double kMinMargin = 0.1;
-
-/// Lists of indices per key in one array: key k's are items[start[k] .. start[k + 1]).
-struct Lists {
-  std::vector<std::uint32_t> start, items;
-  struct Range {
-    const std::uint32_t *b, *e;
-    const std::uint32_t* begin() const { return b; }
-    const std::uint32_t* end() const { return e; }
-  };
-  Range operator[](std::uint32_t k) const {
-    return {items.data() + start[k], items.data() + start[k + 1]};
-  }
-  /// From pairs(emit), which calls emit(key, item) for every item, in the order to keep.
-  template <class Pairs>
-  void build(std::size_t keys, const Pairs& pairs) {
-    start.assign(keys + 1, 0);
-    pairs([&](std::uint32_t k, std::uint32_t) { ++start[k + 1]; });
-    for (std::size_t k = 0; k < keys; ++k) start[k + 1] += start[k];
-    items.resize(start.back());
-    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
-    pairs([&](std::uint32_t k, std::uint32_t item) { items[fill[k]++] = item; });
-  }
-};
 
 /// Per-vertex state of the search.
 struct State {
@@ -385,7 +363,7 @@ class ShellSearch {
   }
 
   /// Inner vertices of `s` (slots in order of their smallest member) and each slot's members.
-  ShellInput build(const State& s, Lists& members) const {
+  ShellInput build(const State& s, IndexLists& members) const {
     const std::size_t n = full_.size();
     ShellInput in;
     in.inner_id.resize(n);
@@ -422,10 +400,10 @@ class ShellSearch {
   const StageMonitor& monitor_;  ///< checked every 1024 prisms of the serial loops
   std::vector<double> full_, floor_;
   std::vector<Vec3d> fallback_, correction_;
-  Lists groups_;                          ///< start weld group -> its vertices
+  IndexLists groups_;                          ///< start weld group -> its vertices
   std::vector<std::uint32_t> group_key_;  ///< per group: its smallest welded vertex (initial)
   std::vector<double> group_depth_;       ///< per group: its welded members' largest depth
-  Lists faces_;                           ///< vertex -> its faces
+  IndexLists faces_;                           ///< vertex -> its faces
   std::vector<std::uint32_t> folded_;  ///< on the surface throughout (t_v = 0)
   std::vector<int> drops_;             ///< per vertex: how often its floor was lowered
   ShellInput caps_;                    ///< cap_faces and cap_points only
@@ -488,7 +466,7 @@ void count_moved_back(const ShellSearch& search, const State& s, ValidShell& out
 bool drop_floors(ShellSearch& search, State& s, const SurfaceMesh& surface, const TetMesh& mesh,
                  const std::vector<std::array<std::uint32_t, 2>>& prism_pairs,
                  const std::vector<std::uint32_t>& bad_tets,
-                 const std::vector<std::uint32_t>& bad_slots, const Lists& members,
+                 const std::vector<std::uint32_t>& bad_slots, const IndexLists& members,
                  std::uint32_t n_slots, const ValidityOptions& options,
                  std::vector<char>& lowered, std::size_t& floor_drops) {
   const std::uint32_t n = static_cast<std::uint32_t>(surface.points.size());
@@ -524,7 +502,7 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
   const std::uint32_t n = static_cast<std::uint32_t>(surface.points.size());
   ShellSearch search(surface, traces, start, options, monitor);
   ValidShell out;
-  Lists members;  ///< slot -> its surface vertices
+  IndexLists members;  ///< slot -> its surface vertices
   AssembleOptions no_quality;
   no_quality.compute_quality = false;
 
