@@ -27,7 +27,6 @@
 namespace vdb_shell {
 namespace {
 
-
 using Ring = std::vector<std::uint32_t>;
 
 constexpr std::uint32_t kUnused = 0xffffffffu;

@@ -4,9 +4,9 @@
 //   vdb_shell_shapes --list
 //
 // Coordinates are written with 17 significant digits (doubles round-trip exactly), through a
-// temporary file renamed onto the target (core/write/shell_writers.h), so a failure never leaves a partial
-// file. Exit codes: 0 success, 2 bad input (unknown shape, bad detail, bad command line, missing
-// output folder; nothing is written), 3 write failure or internal error.
+// temporary file renamed onto the target (core/write/shell_writers.h), so a failure never leaves a
+// partial file. Exit codes: 0 success, 2 bad input (unknown shape, bad detail, bad command line,
+// missing output folder; nothing is written), 3 write failure or internal error.
 #include <cctype>
 #include <cstdio>
 #include <filesystem>

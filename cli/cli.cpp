@@ -69,7 +69,6 @@ struct CliOptions {
   }
 };
 
-
 std::string fmt(double v) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.6g", v);
@@ -169,9 +168,7 @@ void print_summary(std::ostream& out, const std::string& path, const LoadedSurfa
 }
 
 /// Rejects options that contradict each other, saying what to do instead.
-bool is_vdb(const std::string& path) {
-  return lower_extension(path) == ".vdb";
-}
+bool is_vdb(const std::string& path) { return lower_extension(path) == ".vdb"; }
 
 void check_contradictions(const CliOptions& o) {
   namespace fs = std::filesystem;
@@ -180,11 +177,13 @@ void check_contradictions(const CliOptions& o) {
   if (o.progress && o.no_progress)
     throw InputError("--progress and --no-progress contradict each other: choose one of them");
   if (o.resolution_given && o.shell.fields.voxel_size > 0)
-    throw InputError("--voxel-size and --resolution both set the voxel size: give only one of "
-                     "them");
+    throw InputError(
+        "--voxel-size and --resolution both set the voxel size: give only one of "
+        "them");
   const bool vdb_inputs = std::all_of(o.inputs.begin(), o.inputs.end(), is_vdb);
   if (o.grid_given && o.shell.level_set.empty() && !vdb_inputs)
-    throw InputError("--grid " + o.shell.grid_name + " names a grid of --level-set or of a .vdb "
+    throw InputError("--grid " + o.shell.grid_name +
+                     " names a grid of --level-set or of a .vdb "
                      "INPUT: give --level-set FILE.vdb too, or drop --grid");
   if (!o.shell.level_set.empty() && std::any_of(o.inputs.begin(), o.inputs.end(), is_vdb))
     throw InputError("a .vdb INPUT is its own level set: drop --level-set");
@@ -192,21 +191,24 @@ void check_contradictions(const CliOptions& o) {
     throw InputError("--adaptivity applies to meshing a .vdb INPUT: drop it for mesh files");
   if (o.batch()) {
     if (o.msh_version_given && o.format != "msh")
-      throw InputError("--msh-version applies to .msh output only: add --format msh or drop "
-                       "--msh-version");
+      throw InputError(
+          "--msh-version applies to .msh output only: add --format msh or drop "
+          "--msh-version");
     return;
   }
   if (o.format_given) {
     if (o.output.empty())
-      throw InputError("--format applies to -o: give -o OUTPUT (its extension chooses the "
-                       "format with one input)");
+      throw InputError(
+          "--format applies to -o: give -o OUTPUT (its extension chooses the "
+          "format with one input)");
     if (fs::path(o.output).extension() != "." + o.format)
       throw InputError("--format " + o.format + " contradicts -o " + o.output +
                        ": with one input the extension of -o chooses the format; drop --format");
   }
   if (o.msh_version_given && fs::path(o.output).extension() != ".msh")
-    throw InputError("--msh-version applies to .msh output only: write -o FILE.msh or drop "
-                     "--msh-version");
+    throw InputError(
+        "--msh-version applies to .msh output only: write -o FILE.msh or drop "
+        "--msh-version");
 }
 
 /// Checks every output path before any work: known extension, existing folder.
@@ -248,20 +250,23 @@ void check_outputs(const CliOptions& o) {
 void check_batch(const CliOptions& o) {
   namespace fs = std::filesystem;
   if (o.output.empty())
-    throw InputError("several inputs: give -o DIR, the folder that receives one shell per input "
-                     "(or run vdb_shell once per input to see each summary)");
+    throw InputError(
+        "several inputs: give -o DIR, the folder that receives one shell per input "
+        "(or run vdb_shell once per input to see each summary)");
   if (!o.grids.empty() || !o.paths.empty() || !o.inner.empty() || !o.shell.level_set.empty())
-    throw InputError("--grids, --paths, --inner and --level-set take a single input: run "
-                     "vdb_shell once per input for them");
+    throw InputError(
+        "--grids, --paths, --inner and --level-set take a single input: run "
+        "vdb_shell once per input for them");
   tet_format_from_path("x." + o.format, o.msh_version);
   auto check_dir = [](const std::string& dir, const char* option, const char* example) {
     if (fs::exists(dir) && !fs::is_directory(dir))
       throw InputError(std::string(option) + " " + dir + " is a file: with several inputs " +
                        option + " names a folder (" + example + ")");
     if (!fs::exists(dir) && fs::path(dir).has_extension())
-      throw InputError(std::string(option) + " " + dir + " looks like a file name: with several "
-                       "inputs " + option + " names a folder, created if missing (" + example +
-                       ")");
+      throw InputError(std::string(option) + " " + dir +
+                       " looks like a file name: with several "
+                       "inputs " +
+                       option + " names a folder, created if missing (" + example + ")");
   };
   check_dir(o.output, "-o", "-o shells/");
   if (!o.report.empty()) check_dir(o.report, "--report", "--report reports/");
@@ -289,7 +294,8 @@ std::string summary_line(const std::string& output, const ShellResult& r, double
   return output + ": " + std::to_string(r.counts.tets) + " tets from " +
          std::to_string(r.input.stats.faces) + " faces, coverage " + fmt(r.quality.coverage) +
          ", quality min " + fmt(r.quality.min_quality) + " median " +
-         fmt(r.quality.median_quality) + ", stops critical " + std::to_string(r.traces.stops(StopReason::kCritical)) + " merge " +
+         fmt(r.quality.median_quality) + ", stops critical " +
+         std::to_string(r.traces.stops(StopReason::kCritical)) + " merge " +
          std::to_string(r.traces.stops(StopReason::kMerge)) + " flux " +
          std::to_string(r.traces.stops(StopReason::kFlux)) + " cap " +
          std::to_string(r.traces.stops(StopReason::kCap)) + ", " + fmt(seconds) + " s";
@@ -333,9 +339,8 @@ RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& 
       err << "vdb_shell: note: " << r.notices[i] << "\n";
   if (opt.verbose)
     err << "vdb_shell: fields: voxel " << fmt(r.field_stats.voxel_size) << ", "
-        << r.field_stats.sdf_active_voxels << " SDF voxels, "
-        << r.field_stats.flux_active_voxels << " flux voxels, " << fmt(r.timings.fields)
-        << " s\n";
+        << r.field_stats.sdf_active_voxels << " SDF voxels, " << r.field_stats.flux_active_voxels
+        << " flux voxels, " << fmt(r.timings.fields) << " s\n";
 
   if (!shell_wanted) {  // --grids only: the fields and the traces as points
     progress.start("write");
@@ -446,8 +451,9 @@ void register_options(CLI::App& app, CliOptions& opt) {
   app.add_option("--level-set", opt.shell.level_set,
                  "Use this .vdb level set as the distance field instead of building one")
       ->group(in);
-  app.add_option("--grid", opt.shell.grid_name, "Grid of --level-set or of a .vdb INPUT to use "
-                                          "(default: 'surface', else the first level set)")
+  app.add_option("--grid", opt.shell.grid_name,
+                 "Grid of --level-set or of a .vdb INPUT to use "
+                 "(default: 'surface', else the first level set)")
       ->group(in);
   app.add_option("--adaptivity", opt.shell.adaptivity,
                  "Meshing a .vdb INPUT: 0 keeps voxel-sized quads, up to 1 merges flat regions "
@@ -543,11 +549,12 @@ void register_options(CLI::App& app, CliOptions& opt) {
 
 int run_cli_impl(int argc, const char* const* argv, std::ostream& out, std::ostream& err,
                  bool err_is_terminal) {
-  CLI::App app{"vdb_shell: turns a closed triangle surface (OBJ, OFF, PLY, STL) into a volumetric\n"
-               "shell of tetrahedra by tracing every vertex inward through a signed distance\n"
-               "field (\"Volumetric Shells using Path Tracing\"). Without -o it validates the\n"
-               "input and prints its summary.",
-               "vdb_shell"};
+  CLI::App app{
+      "vdb_shell: turns a closed triangle surface (OBJ, OFF, PLY, STL) into a volumetric\n"
+      "shell of tetrahedra by tracing every vertex inward through a signed distance\n"
+      "field (\"Volumetric Shells using Path Tracing\"). Without -o it validates the\n"
+      "input and prints its summary.",
+      "vdb_shell"};
   app.option_defaults()->always_capture_default();
   app.get_formatter()->column_width(40);
 

@@ -4,8 +4,8 @@
 // the tests and the benchmarks call it.
 #include "vdb_shell/vdb_shell.h"
 
-#include <nlohmann/json.hpp>
 #include <tbb/task_arena.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -14,8 +14,8 @@
 #include <utility>
 
 #include "core/base/timer.h"
-#include "core/write/trace_writer.h"
 #include "core/write/shell_writers.h"
+#include "core/write/trace_writer.h"
 #include "vdb_ops/point_index_vdb.h"
 
 namespace vdb_shell {
@@ -47,8 +47,8 @@ auto in_arena(int threads, const Body& body) {
     const std::uint32_t f = crossing[0][0], g = crossing[0][1];
     const Vec3d& p = mesh.points[mesh.triangles[f][0]];
     std::ostringstream message;
-    message << surface.source << ": the surface intersects itself (triangles " << f << " and "
-            << g << ", near (" << p.x << ", " << p.y << ", " << p.z
+    message << surface.source << ": the surface intersects itself (triangles " << f << " and " << g
+            << ", near (" << p.x << ", " << p.y << ", " << p.z
             << ")), so it bounds no single volume and no valid shell exists; repair it (for a "
                ".vdb input, a lower --adaptivity); nothing was written";
     throw InputError(message.str());
@@ -71,12 +71,11 @@ auto in_arena(int threads, const Body& body) {
     std::replace(text.begin(), text.end(), '\n', ';');
     throw InputError(text);
   }
-  std::string message = surface.source + ": could not make the shell valid after " +
-                        std::to_string(valid.rounds) + " rounds (" + describe_problems(checks) +
-                        ")" +
-                        (valid.floor_valid ? "" : "; the thinnest shell is invalid too: " +
-                                                      valid.floor_problems) +
-                        "; nothing was written — please report this input";
+  std::string message =
+      surface.source + ": could not make the shell valid after " + std::to_string(valid.rounds) +
+      " rounds (" + describe_problems(checks) + ")" +
+      (valid.floor_valid ? "" : "; the thinnest shell is invalid too: " + valid.floor_problems) +
+      "; nothing was written — please report this input";
   while (!message.empty() && message.back() == '\n') message.pop_back();
   std::replace(message.begin(), message.end(), '\n', ';');
   throw InternalError(message);
@@ -93,7 +92,8 @@ SurfaceMesh inner_surface_of(const SurfaceMesh& mesh, const ShellInput& input) {
       inner.points.push_back(mesh.points[v]);
     }
   inner.triangles.reserve(mesh.triangles.size());
-  for (const Triangle& t : mesh.triangles) inner.triangles.push_back({id[t[0]], id[t[2]], id[t[1]]});
+  for (const Triangle& t : mesh.triangles)
+    inner.triangles.push_back({id[t[0]], id[t[2]], id[t[1]]});
   return inner;
 }
 
@@ -118,10 +118,9 @@ ShellResult run(const LoadedSurface& surface, const ShellOptions& options,
     FieldOptions field_options = options.fields;
     field_options.flux_min =
         std::clamp(0.5 * options.trace.flux_threshold, 1e-3, field_options.flux_min);
-    fields = options.level_set.empty()
-                 ? build_fields(mesh, field_options, monitor)
-                 : fields_from_level_set(options.level_set, options.grid_name, mesh,
-                                         field_options, monitor);
+    fields = options.level_set.empty() ? build_fields(mesh, field_options, monitor)
+                                       : fields_from_level_set(options.level_set, options.grid_name,
+                                                               mesh, field_options, monitor);
     monitor.finish();
     r.timings.fields = seconds_since(t0);
   }
@@ -193,12 +192,12 @@ ShellResult run(const LoadedSurface& surface, const ShellOptions& options,
 void check_options(const ShellOptions& o) {
   const FieldOptions& f = o.fields;
   if (f.voxel_size <= 0)
-    require(f.resolution >= kMinResolution && f.resolution <= 16384, "--resolution",
-            f.resolution, "must be in [" + std::to_string(kMinResolution) + ", 16384]");
+    require(f.resolution >= kMinResolution && f.resolution <= 16384, "--resolution", f.resolution,
+            "must be in [" + std::to_string(kMinResolution) + ", 16384]");
   require(std::isfinite(f.voxel_size) && f.voxel_size >= 0, "--voxel-size", f.voxel_size,
           "must be a length >= 0 (0: use --resolution)");
-  require(std::isfinite(f.max_memory_gb) && f.max_memory_gb > 0, "--max-memory",
-          f.max_memory_gb, "must be a positive number of GiB");
+  require(std::isfinite(f.max_memory_gb) && f.max_memory_gb > 0, "--max-memory", f.max_memory_gb,
+          "must be a positive number of GiB");
   const ThicknessOptions& t = o.thickness;
   require(std::isfinite(t.max_thickness) && t.max_thickness >= 0, "--max-thickness",
           t.max_thickness, "must be >= 0 (0: as thick as possible)");
@@ -229,17 +228,17 @@ ShellResult build_shell(const SurfaceMesh& mesh, const ShellOptions& options,
 }
 
 LoadedSurface load_level_set_surface(const std::string& vdb_path, const ShellOptions& options) {
-  require(options.adaptivity >= 0 && options.adaptivity <= 1, "--adaptivity",
-          options.adaptivity, "must be in [0, 1]");
-  return make_surface(level_set_to_soup(vdb_path, options.grid_name, options.adaptivity),
-                      vdb_path);
+  require(options.adaptivity >= 0 && options.adaptivity <= 1, "--adaptivity", options.adaptivity,
+          "must be in [0, 1]");
+  return make_surface(level_set_to_soup(vdb_path, options.grid_name, options.adaptivity), vdb_path);
 }
 
 ShellResult build_shell_from_level_set(const std::string& vdb_path, const ShellOptions& options,
                                        const RunControl& control) {
   if (!options.level_set.empty())
-    throw InputError("a .vdb input is its own level set: leave ShellOptions::level_set empty "
-                     "(--level-set)");
+    throw InputError(
+        "a .vdb input is its own level set: leave ShellOptions::level_set empty "
+        "(--level-set)");
   ShellOptions with_level_set = options;
   with_level_set.level_set = vdb_path;
   return build_shell(load_level_set_surface(vdb_path, options), with_level_set, control);
@@ -250,28 +249,26 @@ std::string report_json(const ShellResult& r, const ReportFiles& files, double r
   nlohmann::ordered_json j;
   const SurfaceStats& in = r.input.stats;
   const FieldStats& fs = r.field_stats;
-  j["input"] = {{"file", r.input.source},
-                {"vertices", in.vertices},
-                {"faces", in.faces},
-                {"components", in.components},
-                {"genus", in.genus},
-                {"enclosed_volume", in.enclosed_volume},
+  j["input"] = {{"file", r.input.source},    {"vertices", in.vertices},
+                {"faces", in.faces},         {"components", in.components},
+                {"genus", in.genus},         {"enclosed_volume", in.enclosed_volume},
                 {"flipped", r.input.flipped}};
   j["fields"] = {{"voxel_size", fs.voxel_size},
                  {"strategy", fs.strategy},
                  {"sdf_active_voxels", fs.sdf_active_voxels},
                  {"flux_active_voxels", fs.flux_active_voxels},
-                 {"seconds", {{"sdf", fs.seconds_sdf},
-                              {"interior", fs.seconds_fill + fs.seconds_refine},
-                              {"flux", fs.seconds_flux},
-                              {"gradient", fs.seconds_gradient}}}};
+                 {"seconds",
+                  {{"sdf", fs.seconds_sdf},
+                   {"interior", fs.seconds_fill + fs.seconds_refine},
+                   {"flux", fs.seconds_flux},
+                   {"gradient", fs.seconds_gradient}}}};
   const TraceResult& traces = r.traces;
-  j["trace"] = {{"step", traces.parameters.step},
-                {"point_size", traces.parameters.point_size},
-                {"integrator", to_string(r.options.trace.integrator)},
-                {"planar_vertices",
-                 std::count(traces.planar.begin(), traces.planar.end(), std::uint8_t{1})},
-                {"samples", traces.samples.size()}};
+  j["trace"] = {
+      {"step", traces.parameters.step},
+      {"point_size", traces.parameters.point_size},
+      {"integrator", to_string(r.options.trace.integrator)},
+      {"planar_vertices", std::count(traces.planar.begin(), traces.planar.end(), std::uint8_t{1})},
+      {"samples", traces.samples.size()}};
   j["stop_reasons"] = {{"critical", traces.stops(StopReason::kCritical)},
                        {"merge", traces.stops(StopReason::kMerge)},
                        {"flux", traces.stops(StopReason::kFlux)},
@@ -306,12 +303,9 @@ std::string report_json(const ShellResult& r, const ReportFiles& files, double r
                      {"floor_valid", v.floor_valid},
                      {"seconds", v.seconds}};
     const QualitySummary& q = r.quality;
-    j["quality"] = {{"min", q.min_quality},
-                    {"median", q.median_quality},
-                    {"mean", q.mean_quality},
-                    {"min_dihedral_deg", q.min_dihedral_deg},
-                    {"non_positive", q.non_positive},
-                    {"histogram", q.histogram}};
+    j["quality"] = {{"min", q.min_quality},           {"median", q.median_quality},
+                    {"mean", q.mean_quality},         {"min_dihedral_deg", q.min_dihedral_deg},
+                    {"non_positive", q.non_positive}, {"histogram", q.histogram}};
   }
   const StageTimings& t = r.timings;
   j["timings_s"] = {{"read", read_seconds},
@@ -342,7 +336,8 @@ void write_traces(const std::string& path, const ShellResult& result) {
 
 void write_fields(const std::string& path, const ShellResult& result) {
   if (!result.fields)
-    throw InputError(path + ": the result holds no fields; build it with "
+    throw InputError(path +
+                     ": the result holds no fields; build it with "
                      "ShellOptions::keep_fields");
   write_grids(path, *result.fields, result.fields->parameters(), &result.traces);
 }

@@ -153,8 +153,8 @@ std::pair<long, long> first_overlap(const TetMesh& shell) {
   };
   for (std::size_t t = 0; t < count; ++t) {
     const Tet& k = shell.tets[t];
-    const Vec3d centroid = (shell.points[k[0]] + shell.points[k[1]] + shell.points[k[2]] +
-                            shell.points[k[3]]) * 0.25;
+    const Vec3d centroid =
+        (shell.points[k[0]] + shell.points[k[1]] + shell.points[k[2]] + shell.points[k[3]]) * 0.25;
     for (int s = 0; s < 5; ++s) {
       const Vec3d p = s == 0 ? centroid : (centroid + shell.points[k[s - 1]]) * 0.5;
       const std::array<int, 3> c = cell(p);
@@ -205,10 +205,8 @@ std::string independent_shell_problems(const SurfaceMesh& surface, const TetMesh
       return problem.str();
     }
     // Outward faces of a positive tet (a, b, c, d): (b, c, d), (a, d, c), (a, b, d), (a, c, b).
-    const std::array<std::array<std::uint32_t, 3>, 4> out = {{{k[1], k[2], k[3]},
-                                                              {k[0], k[3], k[2]},
-                                                              {k[0], k[1], k[3]},
-                                                              {k[0], k[2], k[1]}}};
+    const std::array<std::array<std::uint32_t, 3>, 4> out = {
+        {{k[1], k[2], k[3]}, {k[0], k[3], k[2]}, {k[0], k[1], k[3]}, {k[0], k[2], k[1]}}};
     for (const auto& f : out) {
       std::array<std::uint32_t, 3> key = f;
       std::sort(key.begin(), key.end());

@@ -41,11 +41,11 @@
 #include <string>
 #include <vector>
 
-#include "core/trace/field_sampler.h"
-#include "core/read/polygon_soup.h"
 #include "core/base/run_control.h"
 #include "core/base/surface_mesh.h"
 #include "core/base/vec3.h"
+#include "core/read/polygon_soup.h"
+#include "core/trace/field_sampler.h"
 
 namespace vdb_shell {
 
@@ -101,13 +101,13 @@ struct FieldOptions {
 
 /// Derived grid geometry and memory estimate for a mesh and options (pure, cheap).
 struct FieldPlan {
-  double voxel_size = 0.0;           ///< world units
-  Vec3d origin;                      ///< world position of voxel (0, 0, 0)'s centre
-  std::array<int, 3> dims{};         ///< voxels along x, y, z covering the bbox plus padding
-  int resolution = 0;                ///< voxels along the longest bbox side (as derived)
-  double interior_voxels = 0.0;      ///< estimate: enclosed volume / voxel_size^3
-  double band_voxels = 0.0;          ///< estimate: surface area / voxel_size^2 * band width
-  std::size_t estimated_bytes = 0;   ///< estimated peak memory of the build
+  double voxel_size = 0.0;          ///< world units
+  Vec3d origin;                     ///< world position of voxel (0, 0, 0)'s centre
+  std::array<int, 3> dims{};        ///< voxels along x, y, z covering the bbox plus padding
+  int resolution = 0;               ///< voxels along the longest bbox side (as derived)
+  double interior_voxels = 0.0;     ///< estimate: enclosed volume / voxel_size^3
+  double band_voxels = 0.0;         ///< estimate: surface area / voxel_size^2 * band width
+  std::size_t estimated_bytes = 0;  ///< estimated peak memory of the build
 };
 
 /// Inclusive index-space box.
@@ -118,23 +118,23 @@ struct IndexBox {
 
 /// What a field build did and cost.
 struct FieldStats {
-  std::string strategy;                  ///< e.g. "meshToVolume exact interior"
-  std::string source;                    ///< "mesh" or the .vdb path and grid name
-  double voxel_size = 0.0;               ///< world units
-  std::array<int, 3> dims{};             ///< extent of the SDF's active voxels, voxels
-  std::size_t sdf_active_voxels = 0;     ///< active voxels of `surface`
-  std::size_t interior_voxels = 0;       ///< active voxels of `surface` with phi < 0
-  std::size_t flux_active_voxels = 0;    ///< active voxels of `flux`
-  std::size_t gradient_active_voxels = 0;///< active voxels of `gradient` (0 if not stored)
-  std::size_t estimated_bytes = 0;       ///< plan_fields() estimate (0 for a level set input)
-  std::size_t grid_bytes = 0;            ///< memory held by all grids after the build
-  double seconds_sdf = 0.0;              ///< signed distance field (incl. interior fill)
-  double seconds_fill = 0.0;             ///< of which: interior fill + refinement (kExactInterior)
-  double seconds_refine = 0.0;           ///< of which: refinement pass (kMeshToVolumeInterior)
-  double seconds_flux = 0.0;             ///< flux grid
-  double seconds_gradient = 0.0;         ///< gradient grid (0 if not stored)
-  double seconds_total = 0.0;            ///< whole build
-  std::vector<std::string> notices;      ///< one sentence each, for the CLI to print
+  std::string strategy;                    ///< e.g. "meshToVolume exact interior"
+  std::string source;                      ///< "mesh" or the .vdb path and grid name
+  double voxel_size = 0.0;                 ///< world units
+  std::array<int, 3> dims{};               ///< extent of the SDF's active voxels, voxels
+  std::size_t sdf_active_voxels = 0;       ///< active voxels of `surface`
+  std::size_t interior_voxels = 0;         ///< active voxels of `surface` with phi < 0
+  std::size_t flux_active_voxels = 0;      ///< active voxels of `flux`
+  std::size_t gradient_active_voxels = 0;  ///< active voxels of `gradient` (0 if not stored)
+  std::size_t estimated_bytes = 0;         ///< plan_fields() estimate (0 for a level set input)
+  std::size_t grid_bytes = 0;              ///< memory held by all grids after the build
+  double seconds_sdf = 0.0;                ///< signed distance field (incl. interior fill)
+  double seconds_fill = 0.0;         ///< of which: interior fill + refinement (kExactInterior)
+  double seconds_refine = 0.0;       ///< of which: refinement pass (kMeshToVolumeInterior)
+  double seconds_flux = 0.0;         ///< flux grid
+  double seconds_gradient = 0.0;     ///< gradient grid (0 if not stored)
+  double seconds_total = 0.0;        ///< whole build
+  std::vector<std::string> notices;  ///< one sentence each, for the CLI to print
 };
 
 /// The fields of one surface. Immutable after construction; safe to share between threads.
@@ -196,8 +196,7 @@ std::unique_ptr<Fields> build_fields(const SurfaceMesh& mesh, const FieldOptions
 ///        not a level set (the message suggests setting the grid class), has non-cubic voxels or
 ///        a non-linear transform, or its active region does not contain every mesh vertex.
 std::unique_ptr<Fields> fields_from_level_set(const std::string& vdb_path,
-                                              const std::string& grid_name,
-                                              const SurfaceMesh& mesh,
+                                              const std::string& grid_name, const SurfaceMesh& mesh,
                                               const FieldOptions& options,
                                               const StageMonitor& monitor = StageMonitor());
 
@@ -215,11 +214,11 @@ void write_grids(const std::string& path, const Fields& fields,
 /// A grid of a .vdb file as the OpenVDB reader sees it (for tests, the CLI and round trips).
 struct VdbGridInfo {
   std::string name;
-  std::string value_type;                        ///< "float", "vec3s", ...
-  std::string grid_class;                        ///< "level set", "fog volume", "unknown", ...
+  std::string value_type;  ///< "float", "vec3s", ...
+  std::string grid_class;  ///< "level set", "fog volume", "unknown", ...
   std::size_t active_voxels = 0;
-  double voxel_size = 0.0;                       ///< world units (x axis)
-  std::map<std::string, std::string> metadata;   ///< every grid metadata item, as text
+  double voxel_size = 0.0;                      ///< world units (x axis)
+  std::map<std::string, std::string> metadata;  ///< every grid metadata item, as text
   std::uint64_t checksum = 0;  ///< FNV-1a over (coord, value bits) of every active voxel
 };
 

@@ -14,15 +14,15 @@ namespace vdb_shell {
 /// builds it (its own voxelization where that applies, then meshToVolume's remaining steps) and
 /// by OpenVDB's meshToVolume alone, with the voxels that differ.
 struct SeedBandComparison {
-  bool voxelized_here = false;         ///< false: the mesh went to meshToVolume both times
-                                       ///< (fewer than 1000 triangles, or a huge triangle)
-  std::size_t flood_filled = 0;        ///< triangles voxelized by a flood fill (thin, or tall
-                                       ///< boxes) instead of bit rows
-  std::size_t band_voxels = 0;         ///< active voxels of the band
-  std::size_t differing_voxels = 0;    ///< distance, triangle or active state differ, plus one
-                                       ///< per tree whose tiles differ (0 expected)
-  double seconds = 0.0;                ///< build_fields()'s band
-  double seconds_mesh_to_volume = 0.0; ///< meshToVolume's
+  bool voxelized_here = false;          ///< false: the mesh went to meshToVolume both times
+                                        ///< (fewer than 1000 triangles, or a huge triangle)
+  std::size_t flood_filled = 0;         ///< triangles voxelized by a flood fill (thin, or tall
+                                        ///< boxes) instead of bit rows
+  std::size_t band_voxels = 0;          ///< active voxels of the band
+  std::size_t differing_voxels = 0;     ///< distance, triangle or active state differ, plus one
+                                        ///< per tree whose tiles differ (0 expected)
+  double seconds = 0.0;                 ///< build_fields()'s band
+  double seconds_mesh_to_volume = 0.0;  ///< meshToVolume's
 };
 
 /// For tests and benchmarks: see SeedBandComparison.

@@ -42,8 +42,8 @@ class VdbPointIndex final : public PointIndex {
         list_(points_),
         transform_(openvdb::math::Transform::createLinearTransform(voxel)),
         voxel_(voxel) {
-    grid_ = openvdb::tools::createPointIndexGrid<openvdb::tools::PointIndexGrid>(list_,
-                                                                                *transform_);
+    grid_ =
+        openvdb::tools::createPointIndexGrid<openvdb::tools::PointIndexGrid>(list_, *transform_);
   }
 
   void find_within_unordered(const Vec3d& p, double radius,
@@ -72,8 +72,7 @@ class VdbPointIndex final : public PointIndex {
 
 }  // namespace
 
-std::unique_ptr<PointIndex> make_vdb_point_index(const std::vector<Vec3d>& points,
-                                                 double radius) {
+std::unique_ptr<PointIndex> make_vdb_point_index(const std::vector<Vec3d>& points, double radius) {
   const double voxel = radius > 0.0 && std::isfinite(radius) ? radius : 1.0;
   for (std::size_t n = 0; n < points.size(); ++n) {
     const Vec3d& p = points[n];

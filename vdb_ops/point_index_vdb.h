@@ -16,8 +16,8 @@
 #include <memory>
 #include <vector>
 
-#include "core/trace/point_index.h"
 #include "core/base/vec3.h"
+#include "core/trace/point_index.h"
 
 namespace vdb_shell {
 
@@ -26,7 +26,6 @@ namespace vdb_shell {
 ///                (non-positive or non-finite: 1).
 /// \throw InputError if a point is not finite or the points lie too far from the origin for
 ///        OpenVDB's 32-bit index coordinates at this voxel size.
-std::unique_ptr<PointIndex> make_vdb_point_index(const std::vector<Vec3d>& points,
-                                                 double radius);
+std::unique_ptr<PointIndex> make_vdb_point_index(const std::vector<Vec3d>& points, double radius);
 
 }  // namespace vdb_shell

@@ -1,7 +1,7 @@
 // trace_points.cpp — the traces as an OpenVDB PointDataGrid; see trace_points.h. The only
 // translation unit that includes OpenVDB's points headers.
-#include <openvdb/openvdb.h>
 #include <openvdb/io/File.h>
+#include <openvdb/openvdb.h>
 #include <openvdb/points/PointConversion.h>
 #include <openvdb/points/PointDataGrid.h>
 #include <openvdb/tools/PointIndexGrid.h>
@@ -111,8 +111,7 @@ const std::vector<std::pair<std::string, std::string>>& trace_points_metadata() 
        "sample"},
       {"vdb_shell_attribute_arc_length",
        "float: length along the trace from the surface vertex, world units"},
-      {"vdb_shell_attribute_stop_reason",
-       "int32, per trace: 0 critical, 1 merge, 2 flux, 3 cap"},
+      {"vdb_shell_attribute_stop_reason", "int32, per trace: 0 critical, 1 merge, 2 flux, 3 cap"},
       {"vdb_shell_attribute_planar", "int32, per trace: 1 planar vertex, 0 non-planar"},
       {"vdb_shell_attribute_vertex", "int32: index of the surface vertex the trace starts from"},
       {"vdb_shell_attribute_sample", "int32: index of the sample along its trace, 0 = surface"},
@@ -149,10 +148,10 @@ openvdb::GridBase::Ptr make_trace_points_grid(const TraceResult& traces,
   grid->setName(kTracePointsGridName);
   for (const auto& [k, v] : trace_points_metadata())
     grid->insertMeta(k, openvdb::StringMetadata(v));
-  grid->insertMeta("vdb_shell_trace_points", openvdb::Int64Metadata(
-                                                 static_cast<std::int64_t>(a.positions.size())));
-  grid->insertMeta("vdb_shell_trace_step", openvdb::StringMetadata(
-                                               format_double(traces.parameters.step)));
+  grid->insertMeta("vdb_shell_trace_points",
+                   openvdb::Int64Metadata(static_cast<std::int64_t>(a.positions.size())));
+  grid->insertMeta("vdb_shell_trace_step",
+                   openvdb::StringMetadata(format_double(traces.parameters.step)));
   grid->insertMeta("vdb_shell_trace_point_size",
                    openvdb::StringMetadata(format_double(traces.parameters.point_size)));
   return grid;
@@ -177,8 +176,7 @@ TracePoints read_trace_points(const std::string& vdb_path, const std::string& gr
     throw InputError("cannot read '" + vdb_path + "' as a .vdb file: " + e.what());
   }
   const PointDataGrid::Ptr grid = openvdb::gridPtrCast<PointDataGrid>(base);
-  if (!grid)
-    throw InputError(where + " is a " + base->valueType() + " grid, not OpenVDB points");
+  if (!grid) throw InputError(where + " is a " + base->valueType() + " grid, not OpenVDB points");
 
   TracePoints out;
   out.voxel_size = grid->voxelSize()[0];

@@ -31,8 +31,8 @@
 #include <utility>
 #include <vector>
 
-#include "core/trace/trace.h"
 #include "core/base/vec3.h"
+#include "core/trace/trace.h"
 
 namespace vdb_shell {
 
@@ -47,14 +47,14 @@ std::size_t trace_point_count(const TraceResult& traces);
 
 /// The `traces` grid of a .vdb file as plain arrays, one entry per point in stored order.
 struct TracePoints {
-  std::vector<Vec3d> positions;           ///< world units
-  std::vector<float> arc_length;          ///< world units
-  std::vector<std::int32_t> stop_reason;  ///< StopReason codes 0..3
-  std::vector<std::int32_t> planar;       ///< 1 planar, 0 non-planar
-  std::vector<std::int32_t> vertex;       ///< surface vertex index
-  std::vector<std::int32_t> sample;       ///< sample index along the trace
-  double voxel_size = 0.0;                ///< world units (x axis of the grid's transform)
-  std::vector<std::string> attributes;    ///< attribute names in descriptor order ("P" first)
+  std::vector<Vec3d> positions;                 ///< world units
+  std::vector<float> arc_length;                ///< world units
+  std::vector<std::int32_t> stop_reason;        ///< StopReason codes 0..3
+  std::vector<std::int32_t> planar;             ///< 1 planar, 0 non-planar
+  std::vector<std::int32_t> vertex;             ///< surface vertex index
+  std::vector<std::int32_t> sample;             ///< sample index along the trace
+  double voxel_size = 0.0;                      ///< world units (x axis of the grid's transform)
+  std::vector<std::string> attributes;          ///< attribute names in descriptor order ("P" first)
   std::map<std::string, std::string> metadata;  ///< every grid metadata item, as text
 };
 

@@ -6,8 +6,8 @@
 #include <limits>
 #include <string>
 
-#include "core/base/errors.h"
 #include "core/assemble/quality.h"
+#include "core/base/errors.h"
 
 namespace vdb_shell {
 namespace {
@@ -23,7 +23,7 @@ struct SplitTable {
 
 // Corner positions of the reference right prism: the outer triangle counter-clockwise seen
 // from +z (outside), the inner one a unit below it (inside).
-constexpr Vec3d kReferenceCorner[6] = {{0, 0, 0}, {1, 0, 0},  {0, 1, 0},
+constexpr Vec3d kReferenceCorner[6] = {{0, 0, 0},  {1, 0, 0},  {0, 1, 0},
                                        {0, 0, -1}, {1, 0, -1}, {0, 1, -1}};
 
 // Corner V(i+1) of the prism whose smallest corner is m: the prism symmetry taking m to V1 is a
@@ -48,11 +48,9 @@ SplitTable make_split_table() {
   for (int m = 0; m < 6; ++m) {
     int v[6];  // v[i] is corner V(i+1) of assemble.h
     for (int i = 0; i < 6; ++i) v[i] = corner_role(m, i);
-    table.splits[m][0] = {oriented({v[0], v[1], v[2], v[5]}),
-                          oriented({v[0], v[1], v[5], v[4]}),
+    table.splits[m][0] = {oriented({v[0], v[1], v[2], v[5]}), oriented({v[0], v[1], v[5], v[4]}),
                           oriented({v[0], v[4], v[5], v[3]})};
-    table.splits[m][1] = {oriented({v[0], v[1], v[2], v[4]}),
-                          oriented({v[0], v[4], v[2], v[5]}),
+    table.splits[m][1] = {oriented({v[0], v[1], v[2], v[4]}), oriented({v[0], v[4], v[2], v[5]}),
                           oriented({v[0], v[4], v[5], v[3]})};
   }
   return table;
@@ -117,7 +115,8 @@ AssembleResult assemble_shell(const SurfaceMesh& surface, const ShellInput& inpu
     for (const std::uint32_t v : surface.triangles[f])
       if (v < n_surface && input.inner_id[v] != kOnSurface)
         throw InputError("assemble_shell: cap face " + std::to_string(f) + " has vertex " +
-                         std::to_string(v) + " off the surface; a cap face needs all three "
+                         std::to_string(v) +
+                         " off the surface; a cap face needs all three "
                          "corners kOnSurface");
     cap_of[f] = static_cast<std::uint32_t>(k);
   }
@@ -125,8 +124,8 @@ AssembleResult assemble_shell(const SurfaceMesh& surface, const ShellInput& inpu
     for (const std::uint32_t v : surface.triangles[f])
       if (v >= n_surface)
         throw InputError("assemble_shell: triangle " + std::to_string(f) + " refers to vertex " +
-                         std::to_string(v) + ", but the surface has " +
-                         std::to_string(n_surface) + " vertices");
+                         std::to_string(v) + ", but the surface has " + std::to_string(n_surface) +
+                         " vertices");
 
   AssembleResult result;
   TetMesh& mesh = result.mesh;
@@ -183,8 +182,7 @@ AssembleResult assemble_shell(const SurfaceMesh& surface, const ShellInput& inpu
     result.dropped_degenerate_tets += static_cast<std::size_t>(prism.dropped);
   }
   if (options.compute_quality) mesh.quality = tet_qualities(mesh);
-  result.seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
 }
 

@@ -6,14 +6,11 @@
 #include <cmath>
 
 namespace vdb_shell {
-namespace {
-
-
-}  // namespace
+namespace {}  // namespace
 
 double tet_quality(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
-  const double sum2 = norm2(b - a) + norm2(c - a) + norm2(d - a) + norm2(c - b) + norm2(d - b) +
-                      norm2(d - c);
+  const double sum2 =
+      norm2(b - a) + norm2(c - a) + norm2(d - a) + norm2(c - b) + norm2(d - b) + norm2(d - c);
   if (!(sum2 > 0.0)) return 0.0;
   const double l_rms = std::sqrt(sum2 / 6.0);
   return 6.0 * std::sqrt(2.0) * tet_volume(a, b, c, d) / (l_rms * l_rms * l_rms);
@@ -69,9 +66,9 @@ QualitySummary summarize_quality(const SurfaceMesh& surface, const TetMesh& mesh
   for (const Tet& v : mesh.tets) {
     const Vec3d& a = mesh.points[v[0]];
     volume += tet_volume(a, mesh.points[v[1]], mesh.points[v[2]], mesh.points[v[3]]);
-    min_dihedral = std::min(
-        min_dihedral, tet_min_dihedral_deg(a, mesh.points[v[1]], mesh.points[v[2]],
-                                           mesh.points[v[3]]));
+    min_dihedral =
+        std::min(min_dihedral,
+                 tet_min_dihedral_deg(a, mesh.points[v[1]], mesh.points[v[2]], mesh.points[v[3]]));
   }
   s.shell_volume = volume;
   s.coverage = s.enclosed_volume > 0.0 ? volume / s.enclosed_volume : 0.0;

@@ -41,14 +41,14 @@ struct QualitySummary {
   /// histogram[i] counts tets with Q in (i / n, (i + 1) / n] (n = histogram_bins); the first bin
   /// is (0, 1/n], Q = 1 falls in the last one.
   std::vector<std::size_t> histogram;
-  std::size_t non_positive = 0;     ///< tets with Q <= 0 (flat or inverted), not in histogram
-  double min_quality = 0.0;         ///< smallest Q (0 when there are no tets)
-  double median_quality = 0.0;      ///< median Q (mean of the two middle values for even counts)
-  double mean_quality = 0.0;        ///< arithmetic mean of Q
-  double min_dihedral_deg = 0.0;    ///< smallest dihedral angle over all tets, degrees
-  double shell_volume = 0.0;        ///< sum of signed tet volumes, world units cubed
-  double enclosed_volume = 0.0;     ///< signed_volume(surface), world units cubed
-  double coverage = 0.0;            ///< shell_volume / enclosed_volume (0 if that is <= 0)
+  std::size_t non_positive = 0;   ///< tets with Q <= 0 (flat or inverted), not in histogram
+  double min_quality = 0.0;       ///< smallest Q (0 when there are no tets)
+  double median_quality = 0.0;    ///< median Q (mean of the two middle values for even counts)
+  double mean_quality = 0.0;      ///< arithmetic mean of Q
+  double min_dihedral_deg = 0.0;  ///< smallest dihedral angle over all tets, degrees
+  double shell_volume = 0.0;      ///< sum of signed tet volumes, world units cubed
+  double enclosed_volume = 0.0;   ///< signed_volume(surface), world units cubed
+  double coverage = 0.0;          ///< shell_volume / enclosed_volume (0 if that is <= 0)
 };
 
 /// Quality histogram and volumes of the shell `mesh` built on `surface`. Reads Q from

@@ -26,9 +26,24 @@ struct Vec3d {
   constexpr Vec3d operator-() const { return {-x, -y, -z}; }
   constexpr Vec3d operator*(double s) const { return {x * s, y * s, z * s}; }
   constexpr Vec3d operator/(double s) const { return {x / s, y / s, z / s}; }
-  Vec3d& operator+=(const Vec3d& o) { x += o.x; y += o.y; z += o.z; return *this; }
-  Vec3d& operator-=(const Vec3d& o) { x -= o.x; y -= o.y; z -= o.z; return *this; }
-  Vec3d& operator*=(double s) { x *= s; y *= s; z *= s; return *this; }
+  Vec3d& operator+=(const Vec3d& o) {
+    x += o.x;
+    y += o.y;
+    z += o.z;
+    return *this;
+  }
+  Vec3d& operator-=(const Vec3d& o) {
+    x -= o.x;
+    y -= o.y;
+    z -= o.z;
+    return *this;
+  }
+  Vec3d& operator*=(double s) {
+    x *= s;
+    y *= s;
+    z *= s;
+    return *this;
+  }
   constexpr bool operator==(const Vec3d& o) const { return x == o.x && y == o.y && z == o.z; }
   constexpr bool operator!=(const Vec3d& o) const { return !(*this == o); }
 };
@@ -66,7 +81,10 @@ inline double tet_volume(const Vec3d& a, const Vec3d& b, const Vec3d& c, const V
 struct BBox {
   Vec3d lo{INFINITY, INFINITY, INFINITY};
   Vec3d hi{-INFINITY, -INFINITY, -INFINITY};
-  void expand(const Vec3d& p) { lo = min_of(lo, p); hi = max_of(hi, p); }
+  void expand(const Vec3d& p) {
+    lo = min_of(lo, p);
+    hi = max_of(hi, p);
+  }
   bool empty() const { return lo.x > hi.x || lo.y > hi.y || lo.z > hi.z; }
   Vec3d extent() const { return empty() ? Vec3d{} : hi - lo; }
   double diagonal() const { return norm(extent()); }

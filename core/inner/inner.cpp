@@ -58,8 +58,8 @@ InnerVertices place_inner_vertices(const SurfaceMesh& mesh, const TraceResult& t
     ends[v] = point_at_arc(traces, v, out.arc[v]);
   }
 
-  const double tol = options.weld_tolerance < 0.0 ? 0.5 * traces.parameters.point_size
-                                                  : options.weld_tolerance;
+  const double tol =
+      options.weld_tolerance < 0.0 ? 0.5 * traces.parameters.point_size : options.weld_tolerance;
   std::vector<char> weldable(n);
   for (std::size_t v = 0; v < n; ++v)
     weldable[v] = out.arc[v] > 0.0 && out.arc[v] >= traces.end_arc(v);

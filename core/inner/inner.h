@@ -38,17 +38,17 @@ struct ShellInput {
 constexpr std::uint32_t kOnSurface = 0xFFFFFFFFu;
 
 struct ThicknessOptions {
-  double max_thickness = 0.0;   ///< world units, along the trace; 0: no global limit
-  double edge_factor = 0.0;     ///< K (paper Fig. 12): limit K * mean incident edge length;
-                                ///< 0: no local limit
-  double weld_tolerance = -1.0; ///< world units; negative: half the point size; 0: no welding
+  double max_thickness = 0.0;    ///< world units, along the trace; 0: no global limit
+  double edge_factor = 0.0;      ///< K (paper Fig. 12): limit K * mean incident edge length;
+                                 ///< 0: no local limit
+  double weld_tolerance = -1.0;  ///< world units; negative: half the point size; 0: no welding
 };
 
 struct InnerVertices {
-  ShellInput input;                 ///< inner points and the inner vertex of each surface vertex
-  std::vector<double> arc;          ///< per surface vertex: arc length at its inner point
-  std::size_t limited = 0;          ///< vertices whose thickness a limit shortened
-  std::size_t welded = 0;           ///< surface vertices sharing another's inner vertex
+  ShellInput input;         ///< inner points and the inner vertex of each surface vertex
+  std::vector<double> arc;  ///< per surface vertex: arc length at its inner point
+  std::size_t limited = 0;  ///< vertices whose thickness a limit shortened
+  std::size_t welded = 0;   ///< surface vertices sharing another's inner vertex
 };
 
 /// \throw InputError for negative or non-finite limits.

@@ -136,8 +136,8 @@ bool check_elements(const PolygonSoup& soup, std::size_t max,
       short_poly.add("face " + std::to_string(p) + " has " + std::to_string(poly.size()));
     for (std::int64_t idx : poly)
       if (idx < 0 || static_cast<std::size_t>(idx) >= nv) {
-        bad_index.add("face " + std::to_string(p) + " uses vertex " + std::to_string(idx) +
-                      " of " + std::to_string(nv));
+        bad_index.add("face " + std::to_string(p) + " uses vertex " + std::to_string(idx) + " of " +
+                      std::to_string(nv));
         break;
       }
   }
@@ -189,9 +189,8 @@ void check_duplicates(const SoupFaces& f, ProblemCollector& duplicate) {
 
 /// Edge rules: every edge shared by exactly two faces that traverse it in opposite directions.
 /// Joins, in `corners` (three per triangle), the corners of the two faces of every manifold edge.
-void check_edges(const SoupFaces& f, ProblemCollector& boundary,
-                 ProblemCollector& nonmanifold_edge, ProblemCollector& orientation,
-                 DisjointSets& corners) {
+void check_edges(const SoupFaces& f, ProblemCollector& boundary, ProblemCollector& nonmanifold_edge,
+                 ProblemCollector& orientation, DisjointSets& corners) {
   const std::vector<EdgeUse> uses = edge_uses(f.tris);
   auto corner_of = [&](std::uint32_t tri, std::uint32_t vertex) {
     const Triangle& v = f.tris[tri].v;
@@ -351,8 +350,9 @@ LoadedSurface make_surface(const PolygonSoup& soup, const std::string& source,
   if (signed_volume(out.mesh) < 0.0) {
     for (Triangle& t : out.mesh.triangles) std::swap(t[1], t[2]);
     out.flipped = true;
-    out.notices.push_back("the surface was oriented inward (negative enclosed volume); all faces "
-                          "were flipped to point outward");
+    out.notices.push_back(
+        "the surface was oriented inward (negative enclosed volume); all faces "
+        "were flipped to point outward");
   }
   if (out.triangulated_polygons)
     out.notices.push_back(std::to_string(out.triangulated_polygons) +

@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "core/read/polygon_soup.h"
 #include "core/base/surface_mesh.h"
+#include "core/read/polygon_soup.h"
 
 namespace vdb_shell {
 
@@ -31,10 +31,10 @@ struct SurfaceStats {
   std::size_t faces = 0;
   std::size_t edges = 0;
   std::size_t components = 0;
-  int genus = 0;                 ///< sum over components of (2 - V + E - F) / 2
-  BBox bbox;                     ///< world units
-  double mean_edge_length = 0;   ///< world units
-  double enclosed_volume = 0;    ///< world units cubed, positive once oriented outward
+  int genus = 0;                ///< sum over components of (2 - V + E - F) / 2
+  BBox bbox;                    ///< world units
+  double mean_edge_length = 0;  ///< world units
+  double enclosed_volume = 0;   ///< world units cubed, positive once oriented outward
 };
 
 /// A validated surface and what was done to it on the way.
@@ -45,8 +45,8 @@ struct LoadedSurface {
   std::size_t polygons_read = 0;          ///< faces in the file before triangulation
   std::size_t triangulated_polygons = 0;  ///< polygons with more than three corners
   std::size_t dropped_unused_vertices = 0;
-  bool flipped = false;                   ///< true when the input was oriented inward
-  std::vector<std::string> notices;       ///< one sentence each, for the CLI to print
+  bool flipped = false;              ///< true when the input was oriented inward
+  std::vector<std::string> notices;  ///< one sentence each, for the CLI to print
 };
 
 /// One broken rule: a short name ("boundary edges") and its first offending elements.

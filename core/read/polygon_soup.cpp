@@ -22,10 +22,10 @@ namespace vdb_shell {
 namespace {
 
 namespace om = OpenMesh;
-using om::VertexHandle;
+using om::EdgeHandle;
 using om::FaceHandle;
 using om::HalfedgeHandle;
-using om::EdgeHandle;
+using om::VertexHandle;
 
 /// BaseImporter that records positions and polygons and ignores every attribute.
 class SoupImporter final : public om::IO::BaseImporter {
@@ -225,15 +225,13 @@ const std::vector<std::string>& supported_surface_extensions() {
 PolygonSoup read_polygon_soup(const std::string& path) {
   namespace fs = std::filesystem;
   std::error_code ec;
-  if (!fs::exists(path, ec))
-    throw InputError(path + ": no such file; check the path");
+  if (!fs::exists(path, ec)) throw InputError(path + ": no such file; check the path");
   if (fs::is_directory(path, ec))
     throw InputError(path + ": is a directory, not a surface mesh file");
   const std::string ext = lower_extension(path);
   const auto& exts = supported_surface_extensions();
   if (std::find(exts.begin(), exts.end(), ext) == exts.end())
-    throw InputError(path + ": unknown surface format '" + ext +
-                     "'; use .obj, .off, .ply or .stl");
+    throw InputError(path + ": unknown surface format '" + ext + "'; use .obj, .off, .ply or .stl");
   const std::uintmax_t size = fs::file_size(path, ec);
   if (ec) throw InputError(path + ": cannot read (" + ec.message() + ")");
   if (size == 0) throw InputError(path + ": the file is empty (0 bytes)");

@@ -16,8 +16,8 @@ namespace vdb_shell {
 
 /// A file's faces as written: any polygon size, indices possibly out of range.
 struct PolygonSoup {
-  std::vector<Vec3d> points;                         ///< positions, file units
-  std::vector<std::vector<std::int64_t>> polygons;   ///< 0-based vertex indices as read
+  std::vector<Vec3d> points;                        ///< positions, file units
+  std::vector<std::vector<std::int64_t>> polygons;  ///< 0-based vertex indices as read
 };
 
 /// Extensions read_polygon_soup() accepts (lower case, with the dot).

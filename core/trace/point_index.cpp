@@ -39,8 +39,7 @@ class HashPointIndex final : public PointIndex {
 
 }  // namespace
 
-std::unique_ptr<PointIndex> make_hash_point_index(const std::vector<Vec3d>& points,
-                                                  double radius) {
+std::unique_ptr<PointIndex> make_hash_point_index(const std::vector<Vec3d>& points, double radius) {
   return std::make_unique<HashPointIndex>(points, radius);
 }
 

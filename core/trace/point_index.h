@@ -33,8 +33,8 @@ class PointIndex {
 
 /// Builds an index over `points`; `radius` is the query radius the caller will use (a hint for
 /// the cell size).
-using PointIndexFactory = std::function<std::unique_ptr<PointIndex>(
-    const std::vector<Vec3d>& points, double radius)>;
+using PointIndexFactory =
+    std::function<std::unique_ptr<PointIndex>(const std::vector<Vec3d>& points, double radius)>;
 
 /// A cell of a uniform grid of cubes of side `side` (the one holding `p`), and its hash: the
 /// key of hash grids over points.
@@ -54,7 +54,6 @@ struct GridCellHash {
 };
 
 /// Uniform hash grid with cells of side `radius`.
-std::unique_ptr<PointIndex> make_hash_point_index(const std::vector<Vec3d>& points,
-                                                  double radius);
+std::unique_ptr<PointIndex> make_hash_point_index(const std::vector<Vec3d>& points, double radius);
 
 }  // namespace vdb_shell

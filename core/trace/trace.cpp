@@ -122,7 +122,7 @@ struct Chunk {
   Vec3d axis;                         ///< unit; zero when the directions bound nothing
   double spread = kPi;                ///< radians: every sample direction within it of `axis`
   double cos_spread = -1, sin_spread = 0;
-  Vec3d start;                        ///< sample 0 of `trace` (kept here for cache locality)
+  Vec3d start;  ///< sample 0 of `trace` (kept here for cache locality)
 };
 
 /// Bounding sphere and direction cone of samples [first, last] of trace v; `dirs` receives
@@ -209,8 +209,7 @@ void resolve_merges(TraceResult& r, const std::vector<std::uint32_t>& which,
     max_radius = std::max(max_radius, chunks[c].radius);
   }
   // Worst case of the querying run's own radius: (kChunkSamples - 1) steps of at most `step`.
-  const double query_pad =
-      ps + max_radius + 0.5 * (kChunkSamples - 1) * r.parameters.step + margin;
+  const double query_pad = ps + max_radius + 0.5 * (kChunkSamples - 1) * r.parameters.step + margin;
   const std::unique_ptr<PointIndex> index = make_index(centres, query_pad);
 
   std::vector<std::uint32_t> new_end(which.size());
@@ -281,19 +280,26 @@ void resolve_merges(TraceResult& r, const std::vector<std::uint32_t>& which,
 
 const char* to_string(StopReason r) {
   switch (r) {
-    case StopReason::kCritical: return "critical";
-    case StopReason::kMerge: return "merge";
-    case StopReason::kFlux: return "flux";
-    case StopReason::kCap: return "cap";
+    case StopReason::kCritical:
+      return "critical";
+    case StopReason::kMerge:
+      return "merge";
+    case StopReason::kFlux:
+      return "flux";
+    case StopReason::kCap:
+      return "cap";
   }
   return "?";
 }
 
 const char* to_string(Integrator i) {
   switch (i) {
-    case Integrator::kEuler: return "euler";
-    case Integrator::kRk2: return "rk2";
-    case Integrator::kRk4: return "rk4";
+    case Integrator::kEuler:
+      return "euler";
+    case Integrator::kRk2:
+      return "rk2";
+    case Integrator::kRk4:
+      return "rk4";
   }
   return "?";
 }
@@ -327,8 +333,8 @@ TraceParameters derive_trace_parameters(const TraceOptions& o, double voxel_size
   p.step = o.step > 0.0 ? o.step : 0.5 * voxel_size;
   p.point_size = o.point_size > 0.0 ? o.point_size : std::sqrt(3.0) * voxel_size;
   const double diag = bounds.empty() ? 0.0 : bounds.diagonal();
-  p.max_steps = o.max_steps > 0 ? o.max_steps
-                                : static_cast<int>(std::min(4.0 * diag / p.step + 16.0, 1e8));
+  p.max_steps =
+      o.max_steps > 0 ? o.max_steps : static_cast<int>(std::min(4.0 * diag / p.step + 16.0, 1e8));
   p.cos_planar = std::cos(o.planar_angle * kPi / 180.0);
   p.cos_merge = std::cos(o.merge_angle * kPi / 180.0);
   return p;
@@ -381,8 +387,7 @@ TraceResult trace_paths(const SurfaceMesh& mesh, const FieldSampler& fields,
   r.stop.resize(n);
   r.merged_with.assign(n, -1);
   for (std::size_t v = 0; v < n; ++v) {
-    std::copy(traces[v].samples.begin(), traces[v].samples.end(),
-              r.samples.begin() + r.offsets[v]);
+    std::copy(traces[v].samples.begin(), traces[v].samples.end(), r.samples.begin() + r.offsets[v]);
     std::copy(traces[v].arc.begin(), traces[v].arc.end(), r.arc_length.begin() + r.offsets[v]);
     r.end[v] = static_cast<std::uint32_t>(traces[v].samples.size() - 1);
     r.stop[v] = traces[v].stop;

@@ -25,10 +25,10 @@
 #include <string>
 #include <vector>
 
-#include "core/trace/field_sampler.h"
-#include "core/trace/point_index.h"
 #include "core/base/run_control.h"
 #include "core/base/surface_mesh.h"
+#include "core/trace/field_sampler.h"
+#include "core/trace/point_index.h"
 
 namespace vdb_shell {
 
@@ -42,15 +42,15 @@ Integrator parse_integrator(const std::string& name);
 
 /// What the user asked for (0 / negative = the documented default derived from the voxel size).
 struct TraceOptions {
-  double step = 0.0;             ///< world units; 0: half the voxel size (eq. 2)
-  double critical = 1e-3;        ///< c of eq. 4 (dimensionless)
-  double point_size = 0.0;       ///< world units; 0: one voxel diagonal (sqrt(3) voxels)
-  double flux_threshold = 0.1;   ///< rho of eq. 8, on the average outward flux in [-1, 1]
-  double planar_angle = 5.0;     ///< degrees; a vertex is planar when all incident face
-                                 ///< normals lie within this angle of each other
-  double merge_angle = 60.0;     ///< degrees; traces meeting at a smaller angle do not merge
+  double step = 0.0;            ///< world units; 0: half the voxel size (eq. 2)
+  double critical = 1e-3;       ///< c of eq. 4 (dimensionless)
+  double point_size = 0.0;      ///< world units; 0: one voxel diagonal (sqrt(3) voxels)
+  double flux_threshold = 0.1;  ///< rho of eq. 8, on the average outward flux in [-1, 1]
+  double planar_angle = 5.0;    ///< degrees; a vertex is planar when all incident face
+                                ///< normals lie within this angle of each other
+  double merge_angle = 60.0;    ///< degrees; traces meeting at a smaller angle do not merge
   Integrator integrator = Integrator::kRk2;
-  int max_steps = 0;             ///< 0: 4 * (bbox diagonal / step) + 16
+  int max_steps = 0;  ///< 0: 4 * (bbox diagonal / step) + 16
 };
 
 /// Step, point size and cap after defaults are applied — one pure function computes them.
@@ -70,12 +70,12 @@ std::vector<std::uint8_t> classify_vertices(const SurfaceMesh& mesh, double plan
 
 /// All traces, one per surface vertex, as compressed rows of samples.
 struct TraceResult {
-  std::vector<std::uint32_t> offsets;  ///< trace v's samples are [offsets[v], offsets[v+1])
-  std::vector<Vec3d> samples;          ///< sample 0 of each trace is the surface vertex
-  std::vector<double> arc_length;      ///< per sample, world units (eq. 5)
-  std::vector<std::uint32_t> end;      ///< per trace: index of its end sample within the trace
-  std::vector<StopReason> stop;        ///< per trace
-  std::vector<std::uint8_t> planar;    ///< per trace
+  std::vector<std::uint32_t> offsets;     ///< trace v's samples are [offsets[v], offsets[v+1])
+  std::vector<Vec3d> samples;             ///< sample 0 of each trace is the surface vertex
+  std::vector<double> arc_length;         ///< per sample, world units (eq. 5)
+  std::vector<std::uint32_t> end;         ///< per trace: index of its end sample within the trace
+  std::vector<StopReason> stop;           ///< per trace
+  std::vector<std::uint8_t> planar;       ///< per trace
   std::vector<std::int64_t> merged_with;  ///< per trace: the other vertex, or -1
 
   TraceParameters parameters;

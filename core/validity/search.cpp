@@ -8,8 +8,8 @@
 #include <limits>
 #include <numeric>
 
-#include "core/base/index_lists.h"
 #include "core/assemble/quality.h"
+#include "core/base/index_lists.h"
 
 namespace vdb_shell {
 namespace {
@@ -46,8 +46,8 @@ constexpr double kMinMargin = 0.1;
 
 /// Per-vertex state of the search.
 struct State {
-  std::vector<double> t;        ///< current arc length; 0: on the surface (folded vertices)
-  std::vector<char> welded;     ///< still sharing its start weld group's point
+  std::vector<double> t;     ///< current arc length; 0: on the surface (folded vertices)
+  std::vector<char> welded;  ///< still sharing its start weld group's point
 };
 
 class ShellSearch {
@@ -285,8 +285,8 @@ class ShellSearch {
   /// corners at the floor remain, settling the volumes around every move. Marks the moved
   /// vertices in `lowered`; returns how many left their weld.
   std::size_t settle_overlaps(State& s, const std::vector<std::array<std::uint32_t, 2>>& pairs,
-                              double shrink, const ShellCheckOptions& options,
-                              double min_quality, std::vector<char>& lowered) const {
+                              double shrink, const ShellCheckOptions& options, double min_quality,
+                              std::vector<char>& lowered) const {
     std::size_t unwelded = 0;
     std::vector<std::uint32_t> step, around, moved;
     for (const auto& [f, g] : pairs) {
@@ -316,8 +316,8 @@ class ShellSearch {
         }
         std::sort(around.begin(), around.end());
         around.erase(std::unique(around.begin(), around.end()), around.end());
-        unwelded += settle_volumes(s, around, shrink, options.zero_volume_tolerance, min_quality,
-                                   lowered);
+        unwelded +=
+            settle_volumes(s, around, shrink, options.zero_volume_tolerance, min_quality, lowered);
       }
     }
     return unwelded;
@@ -400,22 +400,21 @@ class ShellSearch {
   const StageMonitor& monitor_;  ///< checked every 1024 prisms of the serial loops
   std::vector<double> full_, floor_;
   std::vector<Vec3d> fallback_, correction_;
-  IndexLists groups_;                          ///< start weld group -> its vertices
+  IndexLists groups_;                     ///< start weld group -> its vertices
   std::vector<std::uint32_t> group_key_;  ///< per group: its smallest welded vertex (initial)
   std::vector<double> group_depth_;       ///< per group: its welded members' largest depth
-  IndexLists faces_;                           ///< vertex -> its faces
-  std::vector<std::uint32_t> folded_;  ///< on the surface throughout (t_v = 0)
-  std::vector<int> drops_;             ///< per vertex: how often its floor was lowered
-  ShellInput caps_;                    ///< cap_faces and cap_points only
+  IndexLists faces_;                      ///< vertex -> its faces
+  std::vector<std::uint32_t> folded_;     ///< on the surface throughout (t_v = 0)
+  std::vector<int> drops_;                ///< per vertex: how often its floor was lowered
+  ShellInput caps_;                       ///< cap_faces and cap_points only
   // position(v, t) of the last build, by vertex (t = -1: none yet).
   mutable std::vector<double> cached_t_;
   mutable std::vector<Vec3d> cached_position_;
 };
 
 /// Offending tets (overlapping pairs aside) and inner slots of a check.
-void collect_offenders(const SurfaceMesh& surface, const ShellInput& in,
-                       const ShellCheckResult& c, std::vector<std::uint32_t>& tets,
-                       std::vector<std::uint32_t>& slots) {
+void collect_offenders(const SurfaceMesh& surface, const ShellInput& in, const ShellCheckResult& c,
+                       std::vector<std::uint32_t>& tets, std::vector<std::uint32_t>& slots) {
   const std::uint32_t n = static_cast<std::uint32_t>(surface.points.size());
   tets.clear();
   slots.clear();
@@ -424,8 +423,8 @@ void collect_offenders(const SurfaceMesh& surface, const ShellInput& in,
   tets.insert(tets.end(), c.first_leaking_tets.begin(), c.first_leaking_tets.end());
   for (std::uint32_t p : c.first_outside_vertices)
     if (p >= n) slots.push_back(p - n);
-  for (const auto* list : {&c.first_missing_triangles, &c.first_shared_triangles,
-                           &c.first_misoriented_triangles})
+  for (const auto* list :
+       {&c.first_missing_triangles, &c.first_shared_triangles, &c.first_misoriented_triangles})
     for (std::uint32_t f : *list)
       for (std::uint32_t v : surface.triangles[f])
         if (in.inner_id[v] != kOnSurface) slots.push_back(in.inner_id[v]);
@@ -467,8 +466,8 @@ bool drop_floors(ShellSearch& search, State& s, const SurfaceMesh& surface, cons
                  const std::vector<std::array<std::uint32_t, 2>>& prism_pairs,
                  const std::vector<std::uint32_t>& bad_tets,
                  const std::vector<std::uint32_t>& bad_slots, const IndexLists& members,
-                 std::uint32_t n_slots, const ValidityOptions& options,
-                 std::vector<char>& lowered, std::size_t& floor_drops) {
+                 std::uint32_t n_slots, const ValidityOptions& options, std::vector<char>& lowered,
+                 std::size_t& floor_drops) {
   const std::uint32_t n = static_cast<std::uint32_t>(surface.points.size());
   bool dropped = false;
   auto drop = [&](std::uint32_t v) {
@@ -526,17 +525,17 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
   double first_offenders = 1;
   for (;; ++out.rounds) {
     // Inverted and flat tets are local: settle them prism by prism before a round.
-    out.unwelded += search.settle_volumes(s, seeds, options.shrink,
-                                          check_options.zero_volume_tolerance,
-                                          options.min_quality, lowered);
+    out.unwelded +=
+        search.settle_volumes(s, seeds, options.shrink, check_options.zero_volume_tolerance,
+                              options.min_quality, lowered);
     out.input = search.build(s, members);
     out.shell = assemble_shell(surface, out.input, no_quality);
     out.checks = check(out.shell.mesh);
     if (out.checks.valid() || out.rounds >= options.max_rounds) break;
     collect_offenders(surface, out.input, out.checks, bad_tets, bad_slots);
     // Progress: the share of the first round's offenders gone (the final check is the last 10%).
-    const double offenders = double(bad_tets.size() + bad_slots.size() +
-                                    out.checks.first_overlapping_pairs.size());
+    const double offenders =
+        double(bad_tets.size() + bad_slots.size() + out.checks.first_overlapping_pairs.size());
     if (out.rounds == 0) first_offenders = std::max(offenders, 1.0);
     monitor.report(0.9 * (1.0 - offenders / first_offenders));
     std::fill(lowered.begin(), lowered.end(), 0);
@@ -577,8 +576,8 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
     for (std::uint32_t slot : bad_slots)
       if (slot_depth(slot) > 0) lower(slot);
     if (!progress) {
-      progress = drop_floors(search, s, surface, out.shell.mesh, prism_pairs, bad_tets,
-                             bad_slots, members, n_slots, options, lowered, out.floor_drops);
+      progress = drop_floors(search, s, surface, out.shell.mesh, prism_pairs, bad_tets, bad_slots,
+                             members, n_slots, options, lowered, out.floor_drops);
     }
     if (!progress) {
       // The floors are as low as they go: the floor configuration itself must be invalid.

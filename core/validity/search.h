@@ -39,38 +39,38 @@
 #include <vector>
 
 #include "core/assemble/assemble.h"
-#include "core/inner/inner.h"
 #include "core/base/run_control.h"
+#include "core/inner/inner.h"
 #include "core/validity/shell_checks.h"
 
 namespace vdb_shell {
 
 struct ValidityOptions {
-  double shrink = 0.85;         ///< factor applied to t_v of a moved-back vertex, in (0, 1)
+  double shrink = 0.85;  ///< factor applied to t_v of a moved-back vertex, in (0, 1)
   /// Tets of a lower volume-length quality are settled like inverted ones (stepped back while a
   /// corner can move; a sliver left at the floor is no violation). 0: volumes only.
   double min_quality = 1e-3;
-  double floor_fraction = 0.02; ///< t_min_v = this * shortest incident edge (capped at full)
-  double floor_drop = 0.25;     ///< factor on the floor of a vertex offending at its floor
-  int max_floor_drops = 4;      ///< at most this many floor drops per vertex
-  int max_rounds = 1000;        ///< safety net (rounds are cheap)
+  double floor_fraction = 0.02;  ///< t_min_v = this * shortest incident edge (capped at full)
+  double floor_drop = 0.25;      ///< factor on the floor of a vertex offending at its floor
+  int max_floor_drops = 4;       ///< at most this many floor drops per vertex
+  int max_rounds = 1000;         ///< safety net (rounds are cheap)
 };
 
 struct ValidShell {
-  ShellInput input;               ///< final inner vertices (compact, order-preserving)
-  AssembleResult shell;           ///< the assembled shell
-  ShellCheckResult checks;        ///< checks of the final shell (valid() unless floor fails)
-  int rounds = 0;                 ///< rounds of the moving-back search
-  int checks_run = 0;             ///< shell checks run in all (the cost of this stage)
-  std::size_t moved_back = 0;     ///< vertices whose final t_v is below their traced depth
-  double moved_back_mean = 0;     ///< mean (traced - final) / traced over moved-back vertices
-  std::size_t unwelded = 0;       ///< vertices that left their weld
-  std::size_t floor_drops = 0;    ///< floors lowered where the floor itself offended
+  ShellInput input;             ///< final inner vertices (compact, order-preserving)
+  AssembleResult shell;         ///< the assembled shell
+  ShellCheckResult checks;      ///< checks of the final shell (valid() unless floor fails)
+  int rounds = 0;               ///< rounds of the moving-back search
+  int checks_run = 0;           ///< shell checks run in all (the cost of this stage)
+  std::size_t moved_back = 0;   ///< vertices whose final t_v is below their traced depth
+  double moved_back_mean = 0;   ///< mean (traced - final) / traced over moved-back vertices
+  std::size_t unwelded = 0;     ///< vertices that left their weld
+  std::size_t floor_drops = 0;  ///< floors lowered where the floor itself offended
   /// The search stopped with only elements at their floors offending (the floors as low as they
   /// go): `checks` is then invalid, and floor_valid says whether the floor configuration failed.
   bool stalled = false;
-  bool floor_valid = true;        ///< false: the search stalled and the floor failed too
-  std::string floor_problems;     ///< what the floor configuration broke, when it did
+  bool floor_valid = true;     ///< false: the search stalled and the floor failed too
+  std::string floor_problems;  ///< what the floor configuration broke, when it did
   /// Folded surface vertices kept on the surface (inner_id kOnSurface, depth 0): their incident
   /// face normals fit in no open hemisphere, and every prism constrains each of its corners'
   /// inner directions against its face normal, so no thin shell has an inner vertex there. Their
@@ -79,7 +79,7 @@ struct ValidShell {
   /// Faces whose three corners are folded: their prism is one tet to a cap point at the floor
   /// depth below the face (ShellInput::cap_faces).
   std::size_t cap_faces = 0;
-  double seconds = 0;             ///< the search, without the final full check (checks.seconds)
+  double seconds = 0;  ///< the search, without the final full check (checks.seconds)
 };
 
 /// Finds the thickest valid inner vertices along the traces, starting from `start`. Reports to

@@ -70,8 +70,7 @@ class AtomicFile {
 /// Writes `path` atomically: opens an AtomicFile, calls `body` with its stream, commits.
 /// If `body` throws, the exception propagates and `path` is left untouched.
 /// \throw ResourceError naming `path` if the file cannot be written.
-void write_file_atomically(const std::string& path,
-                           const std::function<void(std::ostream&)>& body);
+void write_file_atomically(const std::string& path, const std::function<void(std::ostream&)>& body);
 
 /// Unlinks every temporary file currently being written by an AtomicFile in this process.
 /// Meant for a signal handler (SIGINT, SIGTERM) before it exits: it only calls unlink() over a

@@ -17,9 +17,9 @@
 #include <system_error>
 #include <utility>
 
-#include "core/write/atomic_file.h"
 #include "core/base/errors.h"
 #include "core/base/file_name.h"
+#include "core/write/atomic_file.h"
 
 namespace vdb_shell {
 namespace {
@@ -49,8 +49,8 @@ class TextOut {
   }
   TextOut& real(double v) {
     char tmp[64];
-    const auto r = std::to_chars(tmp, tmp + sizeof(tmp), v, std::chars_format::general,
-                                 kDoubleDigits);
+    const auto r =
+        std::to_chars(tmp, tmp + sizeof(tmp), v, std::chars_format::general, kDoubleDigits);
     buffer_.append(tmp, r.ptr);
     return maybe_flush();
   }
@@ -60,9 +60,7 @@ class TextOut {
     buffer_.append(tmp, r.ptr);
     return maybe_flush();
   }
-  TextOut& point(const Vec3d& p) {
-    return real(p.x).ch(' ').real(p.y).ch(' ').real(p.z);
-  }
+  TextOut& point(const Vec3d& p) { return real(p.x).ch(' ').real(p.y).ch(' ').real(p.z); }
   /// Writes everything buffered to the stream.
   void flush() {
     os_.write(buffer_.data(), static_cast<std::streamsize>(buffer_.size()));
@@ -102,8 +100,7 @@ void check_tet_mesh(const TetMesh& mesh) {
   const auto check_size = [](std::size_t size, std::size_t want, const char* name) {
     if (size != 0 && size != want) {
       throw InternalError(std::string("tet mesh writer: '") + name + "' has " +
-                          std::to_string(size) + " entries, expected 0 or " +
-                          std::to_string(want));
+                          std::to_string(size) + " entries, expected 0 or " + std::to_string(want));
     }
   };
   check_size(mesh.quality.size(), nt, "quality");
@@ -118,7 +115,10 @@ void check_tet_mesh(const TetMesh& mesh) {
 template <typename Values, typename Emit>
 void vtu_data_array(TextOut& out, const char* type, const char* name, const Values& values,
                     Emit emit) {
-  out.str("        <DataArray type=\"").str(type).str("\" Name=\"").str(name)
+  out.str("        <DataArray type=\"")
+      .str(type)
+      .str("\" Name=\"")
+      .str(name)
       .str("\" format=\"ascii\">\n");
   for (std::size_t i = 0; i < values.size(); ++i) {
     out.str(i % 8 == 0 ? "          " : " ");
@@ -132,12 +132,15 @@ void write_vtu(std::ostream& os, const TetMesh& mesh) {
   TextOut out(os);
   const auto as_real = [&out](double v) { out.real(v); };
   const auto as_int = [&out](auto v) { out.integer(static_cast<long long>(v)); };
-  out.str("<?xml version=\"1.0\"?>\n"
-          "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
-          "header_type=\"UInt64\">\n"
-          "  <UnstructuredGrid>\n");
-  out.str("    <Piece NumberOfPoints=\"").integer(static_cast<long long>(mesh.points.size()))
-      .str("\" NumberOfCells=\"").integer(static_cast<long long>(mesh.tets.size()))
+  out.str(
+      "<?xml version=\"1.0\"?>\n"
+      "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
+      "header_type=\"UInt64\">\n"
+      "  <UnstructuredGrid>\n");
+  out.str("    <Piece NumberOfPoints=\"")
+      .integer(static_cast<long long>(mesh.points.size()))
+      .str("\" NumberOfCells=\"")
+      .integer(static_cast<long long>(mesh.tets.size()))
       .str("\">\n");
   if (!mesh.inner.empty() || !mesh.thickness.empty()) {
     out.str("      <PointData>\n");
@@ -155,35 +158,47 @@ void write_vtu(std::ostream& os, const TetMesh& mesh) {
     }
     out.str("      </CellData>\n");
   }
-  out.str("      <Points>\n"
-          "        <DataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\" "
-          "format=\"ascii\">\n");
+  out.str(
+      "      <Points>\n"
+      "        <DataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\" "
+      "format=\"ascii\">\n");
   for (const Vec3d& p : mesh.points) out.str("          ").point(p).ch('\n');
-  out.str("        </DataArray>\n"
-          "      </Points>\n"
-          "      <Cells>\n"
-          "        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n");
+  out.str(
+      "        </DataArray>\n"
+      "      </Points>\n"
+      "      <Cells>\n"
+      "        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n");
   for (const Tet& t : mesh.tets) {
-    out.str("          ").integer(t[0]).ch(' ').integer(t[1]).ch(' ').integer(t[2]).ch(' ')
-        .integer(t[3]).ch('\n');
+    out.str("          ")
+        .integer(t[0])
+        .ch(' ')
+        .integer(t[1])
+        .ch(' ')
+        .integer(t[2])
+        .ch(' ')
+        .integer(t[3])
+        .ch('\n');
   }
-  out.str("        </DataArray>\n"
-          "        <DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n");
+  out.str(
+      "        </DataArray>\n"
+      "        <DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n");
   for (std::size_t i = 0; i < mesh.tets.size(); ++i) {
     out.str(i % 8 == 0 ? "          " : " ").integer(static_cast<long long>(4 * (i + 1)));
     if (i % 8 == 7 || i + 1 == mesh.tets.size()) out.ch('\n');
   }
-  out.str("        </DataArray>\n"
-          "        <DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n");
+  out.str(
+      "        </DataArray>\n"
+      "        <DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n");
   for (std::size_t i = 0; i < mesh.tets.size(); ++i) {
     out.str(i % 16 == 0 ? "          " : " ").integer(kVtkTetra);
     if (i % 16 == 15 || i + 1 == mesh.tets.size()) out.ch('\n');
   }
-  out.str("        </DataArray>\n"
-          "      </Cells>\n"
-          "    </Piece>\n"
-          "  </UnstructuredGrid>\n"
-          "</VTKFile>\n");
+  out.str(
+      "        </DataArray>\n"
+      "      </Cells>\n"
+      "    </Piece>\n"
+      "  </UnstructuredGrid>\n"
+      "</VTKFile>\n");
   out.flush();
 }
 
@@ -206,16 +221,24 @@ void write_vtk(std::ostream& os, const TetMesh& mesh) {
   const auto as_int = [&out](auto v) { out.integer(static_cast<long long>(v)); };
   const auto np = static_cast<long long>(mesh.points.size());
   const auto nt = static_cast<long long>(mesh.tets.size());
-  out.str("# vtk DataFile Version 4.2\n"
-          "vdb_shell tetrahedral shell\n"
-          "ASCII\n"
-          "DATASET UNSTRUCTURED_GRID\n");
+  out.str(
+      "# vtk DataFile Version 4.2\n"
+      "vdb_shell tetrahedral shell\n"
+      "ASCII\n"
+      "DATASET UNSTRUCTURED_GRID\n");
   out.str("POINTS ").integer(np).str(" double\n");
   for (const Vec3d& p : mesh.points) out.point(p).ch('\n');
   out.str("CELLS ").integer(nt).ch(' ').integer(5 * nt).ch('\n');
   for (const Tet& t : mesh.tets) {
-    out.str("4 ").integer(t[0]).ch(' ').integer(t[1]).ch(' ').integer(t[2]).ch(' ')
-        .integer(t[3]).ch('\n');
+    out.str("4 ")
+        .integer(t[0])
+        .ch(' ')
+        .integer(t[1])
+        .ch(' ')
+        .integer(t[2])
+        .ch(' ')
+        .integer(t[3])
+        .ch('\n');
   }
   out.str("CELL_TYPES ").integer(nt).ch('\n');
   for (long long i = 0; i < nt; ++i) out.integer(kVtkTetra).ch('\n');
@@ -245,8 +268,8 @@ template <typename Values, typename Emit>
 void msh_data(TextOut& out, const char* section, const char* name, const Values& values,
               Emit emit) {
   out.ch('$').str(section).ch('\n');
-  out.str("1\n\"").str(name).str("\"\n");          // one string tag: the name
-  out.str("1\n0\n");                               // one real tag: the time
+  out.str("1\n\"").str(name).str("\"\n");  // one string tag: the name
+  out.str("1\n0\n");                       // one real tag: the time
   out.str("3\n0\n1\n").integer(static_cast<long long>(values.size())).ch('\n');  // step, 1 comp
   for (std::size_t i = 0; i < values.size(); ++i) {
     out.integer(static_cast<long long>(i + 1)).ch(' ');
@@ -281,8 +304,15 @@ void write_msh41(std::ostream& os, const TetMesh& mesh) {
   BBox box;
   for (const Vec3d& p : mesh.points) box.expand(p);
   if (box.empty()) box = BBox{Vec3d{}, Vec3d{}};
-  out.str("$Entities\n0 0 0 1\n").integer(kGmshVolumeTag).ch(' ').point(box.lo).ch(' ')
-      .point(box.hi).str(" 1 ").integer(kGmshVolumeTag).str(" 0\n$EndEntities\n");
+  out.str("$Entities\n0 0 0 1\n")
+      .integer(kGmshVolumeTag)
+      .ch(' ')
+      .point(box.lo)
+      .ch(' ')
+      .point(box.hi)
+      .str(" 1 ")
+      .integer(kGmshVolumeTag)
+      .str(" 0\n$EndEntities\n");
   out.str("$Nodes\n");
   if (np == 0) {
     out.str("0 0 0 0\n");
@@ -297,8 +327,7 @@ void write_msh41(std::ostream& os, const TetMesh& mesh) {
     out.str("0 0 0 0\n");
   } else {
     out.str("1 ").integer(nt).str(" 1 ").integer(nt).ch('\n');
-    out.str("3 ").integer(kGmshVolumeTag).ch(' ').integer(kGmshTetra).ch(' ').integer(nt)
-        .ch('\n');
+    out.str("3 ").integer(kGmshVolumeTag).ch(' ').integer(kGmshTetra).ch(' ').integer(nt).ch('\n');
     long long tag = 1;
     for (const Tet& t : mesh.tets) {
       out.integer(tag++);
@@ -322,7 +351,12 @@ void write_msh22(std::ostream& os, const TetMesh& mesh) {
   tag = 1;
   for (const Tet& t : mesh.tets) {
     // number, type, 2 tags (physical group, elementary entity), nodes
-    out.integer(tag++).ch(' ').integer(kGmshTetra).str(" 2 ").integer(kGmshVolumeTag).ch(' ')
+    out.integer(tag++)
+        .ch(' ')
+        .integer(kGmshTetra)
+        .str(" 2 ")
+        .integer(kGmshVolumeTag)
+        .ch(' ')
         .integer(kGmshVolumeTag);
     for (std::uint32_t v : t) out.ch(' ').integer(static_cast<long long>(v) + 1);
     out.ch('\n');
@@ -338,7 +372,8 @@ void write_msh22(std::ostream& os, const TetMesh& mesh) {
 void write_medit(std::ostream& os, const TetMesh& mesh) {
   TextOut out(os);
   out.str("MeshVersionFormatted 2\n\nDimension 3\n\nVertices\n")
-      .integer(static_cast<long long>(mesh.points.size())).ch('\n');
+      .integer(static_cast<long long>(mesh.points.size()))
+      .ch('\n');
   for (const Vec3d& p : mesh.points) out.point(p).str(" 0\n");
   out.str("\nTetrahedra\n").integer(static_cast<long long>(mesh.tets.size())).ch('\n');
   for (const Tet& t : mesh.tets) {
@@ -414,8 +449,10 @@ void write_tetgen(const std::string& path, const TetMesh& mesh) {
 
 void write_obj(std::ostream& os, const SurfaceMesh& mesh) {
   TextOut out(os);
-  out.str("# vdb_shell surface: ").integer(static_cast<long long>(mesh.points.size()))
-      .str(" vertices, ").integer(static_cast<long long>(mesh.triangles.size()))
+  out.str("# vdb_shell surface: ")
+      .integer(static_cast<long long>(mesh.points.size()))
+      .str(" vertices, ")
+      .integer(static_cast<long long>(mesh.triangles.size()))
       .str(" triangles\n");
   for (const Vec3d& p : mesh.points) out.str("v ").point(p).ch('\n');
   for (const Triangle& t : mesh.triangles) {
@@ -428,8 +465,11 @@ void write_obj(std::ostream& os, const SurfaceMesh& mesh) {
 
 void write_off(std::ostream& os, const SurfaceMesh& mesh) {
   TextOut out(os);
-  out.str("OFF\n").integer(static_cast<long long>(mesh.points.size())).ch(' ')
-      .integer(static_cast<long long>(mesh.triangles.size())).str(" 0\n");
+  out.str("OFF\n")
+      .integer(static_cast<long long>(mesh.points.size()))
+      .ch(' ')
+      .integer(static_cast<long long>(mesh.triangles.size()))
+      .str(" 0\n");
   for (const Vec3d& p : mesh.points) out.point(p).ch('\n');
   for (const Triangle& t : mesh.triangles) {
     out.ch('3');
@@ -478,8 +518,8 @@ TetFormat tet_format_from_path(const std::string& path, int msh_version) {
                      ": use 41 (MSH 4.1) or 22 (MSH 2.2)");
   }
   throw InputError("cannot tell the tet mesh format of " + path + " from its extension" +
-                   (ext.empty() ? std::string() : " '" + ext + "'") +
-                   ": use one of " + join(tet_mesh_extensions()) +
+                   (ext.empty() ? std::string() : " '" + ext + "'") + ": use one of " +
+                   join(tet_mesh_extensions()) +
                    " (.ele writes the TetGen .node/.ele/.face triple)");
 }
 
@@ -495,7 +535,8 @@ std::vector<Triangle> tet_boundary_faces(const TetMesh& mesh) {
   for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
     const Tet& tet = mesh.tets[t];
     for (int f = 0; f < 4; ++f) {
-      std::array<std::uint32_t, 3> s = {tet[kTetOutwardFace[f][0]], tet[kTetOutwardFace[f][1]], tet[kTetOutwardFace[f][2]]};
+      std::array<std::uint32_t, 3> s = {tet[kTetOutwardFace[f][0]], tet[kTetOutwardFace[f][1]],
+                                        tet[kTetOutwardFace[f][2]]};
       std::sort(s.begin(), s.end());
       keys.push_back({s, 4 * static_cast<std::uint64_t>(t) + static_cast<std::uint64_t>(f)});
     }

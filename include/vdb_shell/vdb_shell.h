@@ -27,16 +27,16 @@
 #include <string>
 #include <vector>
 
-#include "core/base/errors.h"
-#include "core/inner/inner.h"
 #include "core/assemble/quality.h"
+#include "core/base/errors.h"
 #include "core/base/run_control.h"
-#include "core/validity/shell_checks.h"
 #include "core/base/surface_mesh.h"
 #include "core/base/tet_mesh.h"
-#include "core/trace/trace.h"
+#include "core/inner/inner.h"
 #include "core/read/load_surface.h"
+#include "core/trace/trace.h"
 #include "core/validity/search.h"
+#include "core/validity/shell_checks.h"
 #include "vdb_ops/fields.h"
 
 namespace vdb_shell {
@@ -44,10 +44,10 @@ namespace vdb_shell {
 /// Every option of a run; each field's default is the CLI's (docs/usage.md has units and the
 /// paper's symbols).
 struct ShellOptions {
-  FieldOptions fields;          ///< --resolution, --voxel-size, --max-memory
-  TraceOptions trace;           ///< --planar-angle, --step, --critical, --point-size, ...
-  ThicknessOptions thickness;   ///< --max-thickness, --thickness-edge-factor
-  ValidityOptions validity;     ///< --min-quality
+  FieldOptions fields;         ///< --resolution, --voxel-size, --max-memory
+  TraceOptions trace;          ///< --planar-angle, --step, --critical, --point-size, ...
+  ThicknessOptions thickness;  ///< --max-thickness, --thickness-edge-factor
+  ValidityOptions validity;    ///< --min-quality
   /// A .vdb file whose level set is the distance field, instead of building one (--level-set).
   std::string level_set;
   /// Grid of `level_set` (or of build_shell_from_level_set()'s file) to use (--grid); empty:
@@ -73,9 +73,9 @@ void check_options(const ShellOptions& options);
 
 /// Where the input came from and what validation did to it.
 struct InputReport {
-  std::string source;        ///< file path, or the name given to build_shell()
-  SurfaceStats stats;        ///< vertices, faces, components, genus, volume (after validation)
-  bool flipped = false;      ///< the input was oriented inward and was flipped
+  std::string source;    ///< file path, or the name given to build_shell()
+  SurfaceStats stats;    ///< vertices, faces, components, genus, volume (after validation)
+  bool flipped = false;  ///< the input was oriented inward and was flipped
 };
 
 /// What the validity search did (docs/validity.md).
@@ -85,7 +85,7 @@ struct ValidityReport {
   std::size_t moved_back_vertices = 0;
   double moved_back_mean_fraction = 0;
   std::size_t unwelded_vertices = 0;
-  std::size_t on_surface_vertices = 0;   ///< folded vertices kept on the surface
+  std::size_t on_surface_vertices = 0;  ///< folded vertices kept on the surface
   std::size_t cap_faces = 0;
   std::size_t floor_drops = 0;
   bool floor_valid = true;
@@ -94,7 +94,7 @@ struct ValidityReport {
 
 /// Counts of the assembled shell.
 struct ShellCounts {
-  std::size_t tets = 0;                        ///< <= 3 * faces
+  std::size_t tets = 0;  ///< <= 3 * faces
   std::size_t points = 0;
   std::size_t dropped_degenerate_tets = 0;     ///< tets with a repeated vertex after welding
   std::size_t collapsed_prisms = 0;            ///< prisms whose inner vertices are one point
@@ -126,19 +126,19 @@ struct ShellResult {
   SurfaceMesh inner_surface;
   /// The input surface after validation (the outer boundary of the shell).
   SurfaceMesh surface;
-  TraceResult traces;                    ///< every vertex's trace, with stop reasons
-  FieldStats field_stats;                ///< voxel size, strategy, active voxels, seconds
+  TraceResult traces;      ///< every vertex's trace, with stop reasons
+  FieldStats field_stats;  ///< voxel size, strategy, active voxels, seconds
   std::map<std::string, std::string> field_parameters;  ///< as written into .vdb metadata
-  std::shared_ptr<const Fields> fields;  ///< only with ShellOptions::keep_fields
+  std::shared_ptr<const Fields> fields;                 ///< only with ShellOptions::keep_fields
   ShellCounts counts;
-  ShellCheckResult checks;               ///< the final full check (valid())
+  ShellCheckResult checks;  ///< the final full check (valid())
   ValidityReport validity;
-  QualitySummary quality;                ///< histogram, min/median/mean Q, coverage, volume
+  QualitySummary quality;  ///< histogram, min/median/mean Q, coverage, volume
   StageTimings timings;
   /// Every notice of the run, one sentence each: validation's (flipped, triangulated, dropped
   /// vertices) first, then the fields' (interior filled by fast sweeping, ...).
   std::vector<std::string> notices;
-  bool traces_only = false;              ///< built with ShellOptions::traces_only
+  bool traces_only = false;  ///< built with ShellOptions::traces_only
 };
 
 /// Builds the shell of a validated surface (load_surface(), make_surface()).
@@ -151,8 +151,7 @@ ShellResult build_shell(const LoadedSurface& surface, const ShellOptions& option
 /// messages name `source`) and builds its shell. Vertices no triangle uses are dropped (a
 /// notice says so), so the shell's first points are the used vertices in their order.
 ShellResult build_shell(const SurfaceMesh& mesh, const ShellOptions& options,
-                        const RunControl& control = {},
-                        const std::string& source = "surface mesh");
+                        const RunControl& control = {}, const std::string& source = "surface mesh");
 
 /// The zero crossing of a .vdb level set (options.grid_name, options.adaptivity) as a validated
 /// surface: the surface a level set input is shelled on.

@@ -59,9 +59,9 @@ struct Sample {
   double gradient = 0.0;  ///< gradient grid
   double active = 0.0;    ///< SDF active voxels
   double flux_active = 0.0;
-  double grid_mb = 0.0;   ///< memory held by the grids
+  double grid_mb = 0.0;  ///< memory held by the grids
   double estimate_mb = 0.0;
-  double peak_mb = 0.0;   ///< child's peak RSS minus the parent's RSS at fork
+  double peak_mb = 0.0;  ///< child's peak RSS minus the parent's RSS at fork
   bool ok = false;
 };
 
@@ -208,8 +208,9 @@ std::pair<double, double> query_ns(const Fields& fields, const SurfaceMesh& mesh
       q -= step * g;
     }
   }
-  const double trace = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
-                           .count() * 1e9 / double(n);
+  const double trace =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() * 1e9 /
+      double(n);
   const BBox box = bounding_box(mesh);
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> u(0.0, 1.0);
@@ -220,8 +221,9 @@ std::pair<double, double> query_ns(const Fields& fields, const SurfaceMesh& mesh
   }
   t0 = std::chrono::steady_clock::now();
   for (const Vec3d& p : pts) sink += probe->gradient(p).x;
-  const double random = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
-                            .count() * 1e9 / double(pts.size());
+  const double random =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() * 1e9 /
+      double(pts.size());
   if (sink == 12345.678) std::cout << "";  // keep the loops
   return {trace, random};
 }
@@ -254,7 +256,6 @@ void sphere_accuracy(SdfMethod method, int res) {
             << sum / double(n) << " |" << std::endl;
 }
 
-
 /// JSON string literal (paths only: escapes quotes, backslashes and control characters).
 std::string json_string(const std::string& s) {
   std::string out = "\"";
@@ -281,8 +282,8 @@ int floor_only(const std::string& path, int res, int threads, bool json) {
                                                   static_cast<std::size_t>(threads));
   const auto t0 = std::chrono::steady_clock::now();
   const SurfaceMesh mesh = load_surface(path).mesh;
-  const double load_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
-                            .count();
+  const double load_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   FieldOptions options;
   options.resolution = res;
   options.max_memory_gb = 64.0;
@@ -313,9 +314,9 @@ int write_subdivided(const std::string& in, const std::string& out, int levels) 
   const std::size_t before = mesh.num_faces();
   for (int l = 0; l < levels; ++l) mesh = subdivide(mesh);
   write_surface(out, mesh);
-  std::cout << in << " (" << before << " faces) subdivided " << levels << "x: "
-            << mesh.num_vertices() << " vertices, " << mesh.num_faces() << " faces -> " << out
-            << std::endl;
+  std::cout << in << " (" << before << " faces) subdivided " << levels
+            << "x: " << mesh.num_vertices() << " vertices, " << mesh.num_faces() << " faces -> "
+            << out << std::endl;
   return 0;
 }
 
@@ -506,9 +507,9 @@ int main(int argc, char** argv) {
         r.grid_mb = double(fields->stats().grid_bytes) / (1024.0 * 1024.0);
         return r;
       });
-      std::cout << "| " << name << " | " << (stored ? "stored Vec3SGrid" : "SDF stencil")
-                << " | " << s.seconds << " | " << s.sdf << " | " << s.grid_mb << " | "
-                << s.peak_mb << " |" << std::endl;
+      std::cout << "| " << name << " | " << (stored ? "stored Vec3SGrid" : "SDF stencil") << " | "
+                << s.seconds << " | " << s.sdf << " | " << s.grid_mb << " | " << s.peak_mb << " |"
+                << std::endl;
     }
   }
   return 0;

@@ -38,8 +38,8 @@
 #include "core/base/vec3.h"
 #include "core/read/load_surface.h"
 #include "core/trace/trace.h"
-#include "vdb_ops/fields.h"
 #include "tests/straight_traces.h"
+#include "vdb_ops/fields.h"
 
 namespace vdb_shell {
 namespace {
@@ -84,23 +84,23 @@ void run(const Job& job) {
     const double total = r->seconds_tracing + r->seconds_merging;
     char speed_up[32];
     std::snprintf(speed_up, sizeof speed_up, "%.2f", total > 0 ? total1 / total : 0.0);
-    std::printf("| %s | %zu | %d | %.2f | %d | %.3f | %.3f | %.3f | %.0f | %s | %zu/%zu/%zu/%zu "
-                "| %.1f | %s |\n",
-                job.label.c_str(), job.mesh.triangles.size(), job.resolution, field_seconds,
-                threads, r->seconds_tracing, r->seconds_merging, total,
-                total > 0 ? static_cast<double>(r->num_traces()) / total : 0.0,
-                speed_up,
-                r->stops(StopReason::kCritical), r->stops(StopReason::kMerge),
-                r->stops(StopReason::kFlux), r->stops(StopReason::kCap),
-                static_cast<double>(r->samples.size()) / static_cast<double>(r->num_traces()),
-                threads == 1 ? "" : (identical(one, two) ? "yes" : "NO"));
+    std::printf(
+        "| %s | %zu | %d | %.2f | %d | %.3f | %.3f | %.3f | %.0f | %s | %zu/%zu/%zu/%zu "
+        "| %.1f | %s |\n",
+        job.label.c_str(), job.mesh.triangles.size(), job.resolution, field_seconds, threads,
+        r->seconds_tracing, r->seconds_merging, total,
+        total > 0 ? static_cast<double>(r->num_traces()) / total : 0.0, speed_up,
+        r->stops(StopReason::kCritical), r->stops(StopReason::kMerge), r->stops(StopReason::kFlux),
+        r->stops(StopReason::kCap),
+        static_cast<double>(r->samples.size()) / static_cast<double>(r->num_traces()),
+        threads == 1 ? "" : (identical(one, two) ? "yes" : "NO"));
     std::fflush(stdout);
   }
 }
 
-using test::StraightTrace;
 using test::largest_deviation;
 using test::rotated;
+using test::StraightTrace;
 
 void run_straightness() {
   struct Case {
@@ -132,8 +132,9 @@ void run_straightness() {
     for (Vec3d& p : c.mesh.points) p = rotated(p, 20.0, 30.0);
     for (StraightTrace& s : c.straight) s.direction = rotated(s.direction, 20.0, 30.0);
   }
-  std::printf("| shape | straight traces | step, voxels | Euler | RK2 | RK4 |\n"
-              "|---|---|---|---|---|---|\n");
+  std::printf(
+      "| shape | straight traces | step, voxels | Euler | RK2 | RK4 |\n"
+      "|---|---|---|---|---|---|\n");
   for (const Case& c : cases) {
     FieldOptions options;
     options.resolution = 128;
@@ -194,10 +195,11 @@ int main(int argc, char** argv) {
         jobs.push_back({"box (detail 46)", make_shape("box", 46), 512});
       }
     }
-    std::printf("| mesh | faces | resolution | fields, s (all threads) | threads | trace, s "
-                "| merge, s | total, s | traces/s | speed-up | stops crit/merge/flux/cap "
-                "| samples/trace | same as 1 thread |\n"
-                "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    std::printf(
+        "| mesh | faces | resolution | fields, s (all threads) | threads | trace, s "
+        "| merge, s | total, s | traces/s | speed-up | stops crit/merge/flux/cap "
+        "| samples/trace | same as 1 thread |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     for (const Job& job : jobs) run(job);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "vdb_shell_bench_traces: %s\n", e.what());

@@ -90,64 +90,74 @@ std::size_t samples(const json& j) { return j["trace"]["samples"].get<std::size_
 // --- options whose effect shows in the JSON report -----------------------------------------------
 
 struct ReportCase {
-  std::string option;              ///< as --help names it (long form)
-  std::vector<std::string> args;   ///< added to the baseline's (which has -r 32 unless replaced)
+  std::string option;             ///< as --help names it (long form)
+  std::vector<std::string> args;  ///< added to the baseline's (which has -r 32 unless replaced)
   std::function<void(const json& base, const json& j)> expect;
 };
 
 const std::vector<ReportCase>& report_cases() {
   static const std::vector<ReportCase> cases = {
-      {"--planar-angle", {"--planar-angle", "80"},
+      {"--planar-angle",
+       {"--planar-angle", "80"},
        [](const json& b, const json& j) {  // a wider cone of face normals counts as planar
          EXPECT_GT(j["trace"]["planar_vertices"], b["trace"]["planar_vertices"]);
          EXPECT_NE(j["stop_reasons"], b["stop_reasons"]);
        }},
-      {"--step", {"--step", "0.005"},
+      {"--step",
+       {"--step", "0.005"},
        [](const json& b, const json& j) {
          EXPECT_DOUBLE_EQ(j["trace"]["step"].get<double>(), 0.005);
          EXPECT_GT(samples(j), 2 * samples(b));  // about a third of the default step
        }},
-      {"--critical", {"--critical", "0.5"},
+      {"--critical",
+       {"--critical", "0.5"},
        [](const json& b, const json& j) {  // c = 0.5 stops wherever |grad phi| halves
          EXPECT_GT(stops(j, "critical"), 2 * stops(b, "critical"));
          EXPECT_LT(samples(j), samples(b));
        }},
-      {"--point-size", {"--point-size", "0.001"},
+      {"--point-size",
+       {"--point-size", "0.001"},
        [](const json& b, const json& j) {
          EXPECT_DOUBLE_EQ(j["trace"]["point_size"].get<double>(), 0.001);
          EXPECT_GT(stops(b, "merge"), 0u);
          EXPECT_LT(stops(j, "merge"), stops(b, "merge"));
        }},
-      {"--flux-threshold", {"--flux-threshold", "0.5"},
+      {"--flux-threshold",
+       {"--flux-threshold", "0.5"},
        [](const json& b, const json& j) {
          EXPECT_GT(stops(b, "flux"), 0u);
          EXPECT_LT(stops(j, "flux"), stops(b, "flux"));
        }},
-      {"--merge-angle", {"--merge-angle", "89"},
+      {"--merge-angle",
+       {"--merge-angle", "89"},
        [](const json& b, const json& j) {  // more traces count as side by side: fewer merges
          EXPECT_LT(stops(j, "merge"), stops(b, "merge"));
        }},
-      {"--integrator", {"--integrator", "euler"},
+      {"--integrator",
+       {"--integrator", "euler"},
        [](const json& b, const json& j) {
          EXPECT_EQ(b["trace"]["integrator"], "rk2");
          EXPECT_EQ(j["trace"]["integrator"], "euler");
          EXPECT_NE(samples(j), samples(b));
        }},
-      {"--resolution", {"-r", "24"},
+      {"--resolution",
+       {"-r", "24"},
        [](const json& b, const json& j) {  // voxel = longest side / resolution
          const double h24 = j["fields"]["voxel_size"].get<double>();
          const double h32 = b["fields"]["voxel_size"].get<double>();
          EXPECT_NEAR(24.0 * h24, 32.0 * h32, 1e-9);
          EXPECT_LT(j["fields"]["sdf_active_voxels"], b["fields"]["sdf_active_voxels"]);
        }},
-      {"--min-quality", {"--min-quality", "0"},
+      {"--min-quality",
+       {"--min-quality", "0"},
        [](const json& b, const json& j) {  // the default 1e-3 steps back from slivers
          EXPECT_GE(b["quality"]["min"].get<double>(), 1e-3);
          EXPECT_LT(j["quality"]["min"].get<double>(), 1e-3);
          EXPECT_LT(j["validity"]["moved_back_vertices"], b["validity"]["moved_back_vertices"]);
          EXPECT_GT(j["shell"]["coverage"], b["shell"]["coverage"]);
        }},
-      {"--voxel-size", {"--voxel-size", "0.05"},
+      {"--voxel-size",
+       {"--voxel-size", "0.05"},
        [](const json& b, const json& j) {
          EXPECT_NEAR(j["fields"]["voxel_size"].get<double>(), 0.05, 1e-12);
          EXPECT_LT(j["fields"]["sdf_active_voxels"], b["fields"]["sdf_active_voxels"]);
@@ -179,8 +189,7 @@ TEST_F(CliOptionEffects, ReportShowsEveryFieldTracingAndShellOption) {
 // --- options with an effect elsewhere than the report --------------------------------------------
 
 TEST_F(CliOptionEffects, QuietPrintsOnlyErrors) {
-  EXPECT_NE(baseline_->err.find("vdb_shell: " + dir_->file("base.vtu") + ": "),
-            std::string::npos)
+  EXPECT_NE(baseline_->err.find("vdb_shell: " + dir_->file("base.vtu") + ": "), std::string::npos)
       << baseline_->err;
   const std::string report = file("s.json");
   const CliRun r = cli({star(), "-o", file("s.vtu"), "-r", "32", "-q", "--report", report});
@@ -300,15 +309,14 @@ TEST_F(CliOptionEffects, LevelSetReplacesTheBuiltField) {
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NEAR(r.report["fields"]["voxel_size"].get<double>(),
               base()["fields"]["voxel_size"].get<double>() * 32.0 / 24.0, 1e-9);
-  EXPECT_NE(r.report["fields"]["strategy"].get<std::string>().find("level set"),
-            std::string::npos);
+  EXPECT_NE(r.report["fields"]["strategy"].get<std::string>().find("level set"), std::string::npos);
 }
 
 TEST_F(CliOptionEffects, GridSelectsTheNamedGrid) {
   const std::string vdb = file("star24.vdb");
   ASSERT_EQ(cli({star(), "-r", "24", "-q", "--grids", vdb}).code, 0);
-  const std::vector<std::string> base_args = {star(), "-o", file("s.vtu"), "-q", "--level-set",
-                                              vdb, "--grid"};
+  const std::vector<std::string> base_args = {star(),        "-o", file("s.vtu"), "-q",
+                                              "--level-set", vdb,  "--grid"};
   auto with_grid = [&](const std::string& name) {
     std::vector<std::string> args = base_args;
     args.push_back(name);
@@ -329,7 +337,8 @@ TEST_F(CliOptionEffects, GridSelectsTheNamedGrid) {
   const std::string two = file("two.vdb");
   const test::CommandResult made = test::run_command(
       "vdb_tool -sphere voxel=0.05 radius=0.3 name=small -sphere voxel=0.05 radius=0.45 "
-      "name=big -write '" + two + "'");
+      "name=big -write '" +
+      two + "'");
   ASSERT_EQ(made.exit_code, 0) << made.err;
   std::map<std::string, double> volume;
   for (const char* name : {"small", "big"}) {
@@ -385,8 +394,7 @@ bool test_exists(const std::string& full_name) {
   for (int s = 0; s < unit.total_test_suite_count(); ++s) {
     const ::testing::TestSuite& suite = *unit.GetTestSuite(s);
     for (int t = 0; t < suite.total_test_count(); ++t)
-      if (std::string(suite.name()) + "." + suite.GetTestInfo(t)->name() == full_name)
-        return true;
+      if (std::string(suite.name()) + "." + suite.GetTestInfo(t)->name() == full_name) return true;
   }
   return false;
 }

@@ -134,9 +134,8 @@ TEST(CliBatch, AllGoodExit0AndFormatChoosesExtension) {
   TempDir dir;
   test::write_text(dir.file("a.obj"), kTetObj);
   test::write_text(dir.file("b.obj"), kTetObj);
-  const InProcess r =
-      cli({dir.file("a.obj"), dir.file("b.obj"), "-o", dir.file("out"), "--format", "msh", "-r",
-           "32", "-q"});
+  const InProcess r = cli({dir.file("a.obj"), dir.file("b.obj"), "-o", dir.file("out"), "--format",
+                           "msh", "-r", "32", "-q"});
   EXPECT_EQ(r.code, 0) << r.err;
   EXPECT_EQ(lines_of(r.out).size(), 2u) << r.out;
   EXPECT_EQ(files_below(dir.file("out")), (std::vector<std::string>{"a.msh", "b.msh"}));
@@ -151,8 +150,8 @@ TEST(CliBatch, Exit2IfEveryFailureIsBadInputElse3) {
   EXPECT_EQ(lines_of(r.out).size(), 2u) << r.out;
   EXPECT_TRUE(files_below(dir.file("o")).empty());
   // A resource failure (memory budget) on the good input and bad input on the other: exit 3.
-  r = cli({dir.file("tet.obj"), dir.file("open.obj"), "-o", dir.file("o"), "--max-memory",
-           "0.000001"});
+  r = cli(
+      {dir.file("tet.obj"), dir.file("open.obj"), "-o", dir.file("o"), "--max-memory", "0.000001"});
   EXPECT_EQ(r.code, 3) << r.err;
   const auto lines = lines_of(r.out);
   ASSERT_EQ(lines.size(), 2u) << r.out;
@@ -222,8 +221,7 @@ TEST(CliOptions, ContradictionsAreRejectedWithWhatToDo) {
 TEST(CliProgress, StagesAndTimingsOnStderr) {
   TempDir dir;
   test::write_text(dir.file("tet.obj"), kTetObj);
-  InProcess r = cli({dir.file("tet.obj"), "-o", dir.file("t.vtu"), "-r", "32", "--progress",
-                     "-v"});
+  InProcess r = cli({dir.file("tet.obj"), "-o", dir.file("t.vtu"), "-r", "32", "--progress", "-v"});
   EXPECT_EQ(r.code, 0) << r.err;
   for (const char* stage : {"[1/6] read ...", "[2/6] fields ...", "[3/6] trace ...",
                             "[4/6] inner ...", "[5/6] validity ...", "[6/6] write ..."})
@@ -239,8 +237,8 @@ TEST(CliProgress, BarOnATerminalUnlessNoProgress) {
   if (run_command("command -v script").exit_code != 0) GTEST_SKIP() << "script (util-linux)";
   TempDir dir;
   test::write_text(dir.file("tet.obj"), kTetObj);
-  const std::string command = "'" + test::vdb_shell_bin() + "' '" + dir.file("tet.obj") +
-                              "' -o '" + dir.file("t.vtu") + "' -r 64";
+  const std::string command = "'" + test::vdb_shell_bin() + "' '" + dir.file("tet.obj") + "' -o '" +
+                              dir.file("t.vtu") + "' -r 64";
   auto on_terminal = [&](const std::string& args) {
     return run_command("script -qec \"" + command + " " + args + " >/dev/null\" /dev/null");
   };

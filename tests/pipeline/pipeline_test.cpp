@@ -33,8 +33,7 @@ ShellOptions at_resolution(int resolution) {
 }
 
 /// build_shell() on a generated shape, with the shell checked independently.
-ShellResult shell_of_shape(const std::string& name, const ShellOptions& options,
-                           int detail = 1) {
+ShellResult shell_of_shape(const std::string& name, const ShellOptions& options, int detail = 1) {
   ShellResult r = build_shell(make_shape(name, detail), options, {}, name);
   EXPECT_EQ(test::independent_shell_problems(r.surface, r.mesh), "") << name;
   return r;
@@ -47,15 +46,36 @@ TEST(Pipeline, ReportHasEveryDocumentedKey) {
   ReportFiles files;
   files.shell = "horn.vtu";
   const nlohmann::json j = nlohmann::json::parse(report_json(r, files, 0.25, 0.5));
-  for (const char* key :
-       {"/input/file", "/input/faces", "/input/vertices", "/input/genus", "/fields/voxel_size",
-        "/fields/strategy", "/trace/step", "/trace/integrator", "/shell/file", "/shell/tets",
-        "/shell/coverage", "/shell/inverted_tets", "/shell/intersecting_tet_pairs",
-        "/shell/valid", "/validity/rounds", "/validity/on_surface_vertices", "/quality/min",
-        "/quality/median", "/quality/histogram", "/stop_reasons/critical",
-        "/stop_reasons/merge", "/stop_reasons/flux", "/stop_reasons/cap", "/timings_s/read",
-        "/timings_s/fields", "/timings_s/trace", "/timings_s/assemble", "/timings_s/check",
-        "/timings_s/write", "/timings_s/total"})
+  for (const char* key : {"/input/file",
+                          "/input/faces",
+                          "/input/vertices",
+                          "/input/genus",
+                          "/fields/voxel_size",
+                          "/fields/strategy",
+                          "/trace/step",
+                          "/trace/integrator",
+                          "/shell/file",
+                          "/shell/tets",
+                          "/shell/coverage",
+                          "/shell/inverted_tets",
+                          "/shell/intersecting_tet_pairs",
+                          "/shell/valid",
+                          "/validity/rounds",
+                          "/validity/on_surface_vertices",
+                          "/quality/min",
+                          "/quality/median",
+                          "/quality/histogram",
+                          "/stop_reasons/critical",
+                          "/stop_reasons/merge",
+                          "/stop_reasons/flux",
+                          "/stop_reasons/cap",
+                          "/timings_s/read",
+                          "/timings_s/fields",
+                          "/timings_s/trace",
+                          "/timings_s/assemble",
+                          "/timings_s/check",
+                          "/timings_s/write",
+                          "/timings_s/total"})
     EXPECT_TRUE(j.contains(nlohmann::json::json_pointer(key))) << key;
   EXPECT_EQ(j["input"]["file"], "horn");
   EXPECT_EQ(j["shell"]["file"], "horn.vtu");
@@ -196,8 +216,10 @@ TEST(Pipeline, FieldNoticesReachTheResult) {
     GTEST_SKIP() << "vdb_tool (libopenvdb-tools) not installed";
   TempDir dir;
   const std::string vdb = dir.file("band.vdb");
-  const auto made = run_command("vdb_tool -sphere voxel=0.04 radius=0.5 width=3 name=surface "
-                                "-write '" + vdb + "'");
+  const auto made = run_command(
+      "vdb_tool -sphere voxel=0.04 radius=0.5 width=3 name=surface "
+      "-write '" +
+      vdb + "'");
   ASSERT_EQ(made.exit_code, 0) << made.err;
   const ShellResult r = build_shell_from_level_set(vdb, ShellOptions());
   // The meshing's notice (its quads split into triangles) first, then the fields'.
@@ -207,8 +229,8 @@ TEST(Pipeline, FieldNoticesReachTheResult) {
   EXPECT_EQ(r.field_stats.notices, std::vector<std::string>{r.notices[1]});
   EXPECT_EQ(test::independent_shell_problems(r.surface, r.mesh), "");
   // The CLI prints it.
-  const auto cli = run_command(test::vdb_shell_bin() + " '" + vdb + "' -o '" +
-                               dir.file("s.vtu") + "'");
+  const auto cli =
+      run_command(test::vdb_shell_bin() + " '" + vdb + "' -o '" + dir.file("s.vtu") + "'");
   ASSERT_EQ(cli.exit_code, 0) << cli.err;
   EXPECT_NE(cli.err.find("vdb_shell: note: the level set"), std::string::npos) << cli.err;
 }
@@ -324,8 +346,7 @@ TEST(Pipeline, BadSurfacesAndOptionsAreInputErrors) {
   open.triangles.pop_back();
   EXPECT_NE(message_of(open, {}).find("boundary edges"), std::string::npos);
   ShellOptions low = at_resolution(4);
-  EXPECT_NE(message_of(box, low).find("--resolution 4"), std::string::npos)
-      << message_of(box, low);
+  EXPECT_NE(message_of(box, low).find("--resolution 4"), std::string::npos) << message_of(box, low);
   ShellOptions quality;
   quality.validity.min_quality = 0.7;
   EXPECT_NE(message_of(box, quality).find("--min-quality"), std::string::npos);

@@ -7,8 +7,8 @@
 #include <tbb/global_control.h>
 
 #include <algorithm>
-#include <iostream>
 #include <cmath>
+#include <iostream>
 #include <memory>
 #include <random>
 #include <string>
@@ -445,15 +445,13 @@ TEST(FieldsVdb, RejectsBadLevelSets) {
   const std::string path = dir.file("f.vdb");
   write_grids(path, *fields, {});
 
-  EXPECT_THROW(fields_from_level_set(dir.file("missing.vdb"), "", box_mesh(), options),
-               InputError);
+  EXPECT_THROW(fields_from_level_set(dir.file("missing.vdb"), "", box_mesh(), options), InputError);
   EXPECT_THROW(fields_from_level_set(path, "nope", box_mesh(), options), InputError);
   try {
     fields_from_level_set(path, "flux", box_mesh(), options);
     FAIL() << "expected InputError";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("grid class to level set"), std::string::npos)
-        << e.what();
+    EXPECT_NE(std::string(e.what()).find("grid class to level set"), std::string::npos) << e.what();
   }
   SurfaceMesh moved = box_mesh();
   for (Vec3d& p : moved.points) p.x += 3.0;

@@ -22,9 +22,9 @@
 
 #include "assets/shapes.h"
 #include "core/trace/trace.h"
+#include "tests/straight_traces.h"
 #include "vdb_ops/fields.h"
 #include "vdb_ops/point_index_vdb.h"
-#include "tests/straight_traces.h"
 
 namespace vdb_shell {
 namespace {
@@ -96,8 +96,8 @@ TEST(VdbPointIndex, ReturnsExactlyTheHashGridsIndices) {
   std::vector<std::uint32_t> a, b;
   std::size_t total = 0;
   for (int q = 0; q < 3000; ++q) {
-    const Vec3d p = q % 2 ? points[static_cast<std::size_t>(q)]
-                          : Vec3d(coord(rng), coord(rng), coord(rng));
+    const Vec3d p =
+        q % 2 ? points[static_cast<std::size_t>(q)] : Vec3d(coord(rng), coord(rng), coord(rng));
     for (double r : {0.0, 0.5 * radius, radius, 2.5 * radius}) {
       hash->find_within(p, r, a);
       vdb->find_within(p, r, b);
@@ -132,9 +132,8 @@ TEST(VdbPointIndex, ConcurrentQueriesAgreeWithSerialOnes) {
   for (std::size_t q = 0; q < n; ++q) vdb->find_within(points[q], 0.02, serial[q]);
   tbb::task_arena arena(4);
   arena.execute([&] {
-    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t q) {
-      vdb->find_within(points[q], 0.02, parallel[q]);
-    });
+    tbb::parallel_for(std::size_t{0}, n,
+                      [&](std::size_t q) { vdb->find_within(points[q], 0.02, parallel[q]); });
   });
   EXPECT_EQ(serial, parallel);
 }
@@ -318,9 +317,9 @@ TEST(TraceVdb, FineMeshStillGivesThickTraces) {
 
 // --- straightness: Euler versus Runge-Kutta ----------------------------------------------------
 
-using test::StraightTrace;
 using test::largest_deviation;
 using test::rotated;
+using test::StraightTrace;
 
 TEST(TraceVdb, RungeKuttaTracesStayAsStraightAsEuler) {
   // Traces that are straight segments in the exact field:

@@ -1,5 +1,5 @@
-// build.cpp — building the fields: build_fields() from a mesh (by SdfMethod), fields_from_level_set()
-// from a .vdb level set, and the Fields accessors.
+// build.cpp — building the fields: build_fields() from a mesh (by SdfMethod),
+// fields_from_level_set() from a .vdb level set, and the Fields accessors.
 #include "vdb_ops/fields/fields_internal.h"
 
 #include <openvdb/tools/FastSweeping.h>
@@ -100,8 +100,8 @@ std::unique_ptr<Fields> build_fields(const SurfaceMesh& mesh, const FieldOptions
         refine_by_neighbours_jacobi(*sdf, *index_grid, im);
         stats.seconds_refine = seconds_since(t1);
       } else {
-        FloatGrid::Ptr band = mesh_to_volume(im, *xform, float(kExteriorBandVoxels),
-                                             float(kExteriorBandVoxels));
+        FloatGrid::Ptr band =
+            mesh_to_volume(im, *xform, float(kExteriorBandVoxels), float(kExteriorBandVoxels));
         monitor.report(0.25);
         sdf = fill_interior_by_sweeping(*band);
       }
@@ -118,8 +118,7 @@ std::unique_ptr<Fields> build_fields(const SurfaceMesh& mesh, const FieldOptions
 }
 
 std::unique_ptr<Fields> fields_from_level_set(const std::string& vdb_path,
-                                              const std::string& grid_name,
-                                              const SurfaceMesh& mesh,
+                                              const std::string& grid_name, const SurfaceMesh& mesh,
                                               const FieldOptions& options,
                                               const StageMonitor& monitor) {
   init_openvdb();
@@ -160,7 +159,8 @@ std::unique_ptr<Fields> fields_from_level_set(const std::string& vdb_path,
                        std::to_string(outside) + " of " + std::to_string(mesh.num_vertices()) +
                        " vertices lie outside it, the first is vertex " + std::to_string(first) +
                        " at (" + format_double(p.x) + ", " + format_double(p.y) + ", " +
-                       format_double(p.z) + "); pass the level set built from this mesh, or "
+                       format_double(p.z) +
+                       "); pass the level set built from this mesh, or "
                        "drop --level-set to build one");
     }
   }
@@ -169,10 +169,10 @@ std::unique_ptr<Fields> fields_from_level_set(const std::string& vdb_path,
   const double h = gmap.voxel_size;
   const double interior = std::abs(signed_volume(mesh)) / (h * h * h);
   const bool unfilled = has_unfilled_interior(*grid);
-  const double bytes = kFixedBytes + double(grid->memUsage()) +
-                       interior * (unfilled ? build_bytes_per_voxel(SdfMethod::kFastSweeping)
-                                            : 0.0) +
-                       (options.store_gradient ? interior * kGradientBytesPerVoxel : 0.0);
+  const double bytes =
+      kFixedBytes + double(grid->memUsage()) +
+      interior * (unfilled ? build_bytes_per_voxel(SdfMethod::kFastSweeping) : 0.0) +
+      (options.store_gradient ? interior * kGradientBytesPerVoxel : 0.0);
   if (bytes > options.max_memory_gb * kGiB) {
     throw ResourceError("the fields of " + where + " need about " + format_gb(bytes) +
                         ", more than --max-memory " + format_double(options.max_memory_gb) +

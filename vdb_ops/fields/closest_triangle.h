@@ -128,8 +128,8 @@ inline void lower_to_closest(const float (&p)[3], const std::int32_t* cand, int 
         best_id = cand[q];
       }
     } else {
-      const float m = std::max(std::max(-bv * t.height[0], -bw * t.height[1]),
-                               (bv + bw - 1.0f) * t.height[2]);
+      const float m =
+          std::max(std::max(-bv * t.height[0], -bw * t.height[1]), (bv + bw - 1.0f) * t.height[2]);
       bound[n_later] = d * d + m * m;
       later[n_later++] = q;
     }

@@ -21,9 +21,8 @@ namespace {
 
 // Gradient and flux: one pass over the SDF's leaves with a padded dense block per leaf.
 
-
-constexpr int kPad = 2;                        // flux needs gradients at +-1, i.e. phi at +-2
-constexpr int kBlock = kLeafDim + 2 * kPad;    // 12
+constexpr int kPad = 2;                      // flux needs gradients at +-1, i.e. phi at +-2
+constexpr int kBlock = kLeafDim + 2 * kPad;  // 12
 
 /// Copies phi over [origin - 2, origin + 9]^3 into `block` (x-major), reading leaf buffers
 /// directly and tile values where there is no leaf.
@@ -119,61 +118,62 @@ void derive_fields(const FloatGrid& sdf, const GradientMap& gmap, double flux_mi
   const float fmin = float(flux_min);
 
   monitor.begin_part(0.75, 1.0, leaves.size());
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size(), 16),
-                    [&](const tbb::blocked_range<std::size_t>& range) {
-    monitor.advance(range.size());
-    FloatGrid::ConstAccessor acc = sdf.getConstAccessor();
-    std::vector<float> phi(kBlock * kBlock * kBlock);
-    float flux[512];
-    auto scratch = std::make_unique<FluxScratch>();
-    for (std::size_t li = range.begin(); li < range.end(); ++li) {
-      const FloatLeaf& leaf = *leaves[li];
-      const Coord origin = leaf.origin();
-      const float* own = leaf.buffer().data();
-      // Bit loops over the mask's words: the interior is dense, and OpenVDB's mask iterators
-      // cost more than the flux itself there.
-      std::uint64_t on[8];
-      for (int w = 0; w < 8; ++w) on[w] = leaf.getValueMask().getWord<std::uint64_t>(w);
-      std::size_t interior = 0;
-      bool any_near = false;  // an active voxel with phi < phi_limit
-      for (int pos = 0; pos < 512; ++pos) {
-        const bool active = (on[pos >> 6] >> (pos & 63)) & 1u;
-        interior += active && own[pos] < 0.0f;
-        any_near |= active && own[pos] < phi_limit;
-      }
-      FloatLeaf* flux_leaf = nullptr;
-      if (any_near || store_gradient) gather_block(acc, origin, phi.data());
-      auto p_at = [&](int x, int y, int z) { return phi[(x * kBlock + y) * kBlock + z]; };
-      if (any_near) {
-        flux_of_block(phi.data(), flux, *scratch);
-        for (int w = 0; w < 8; ++w)
-          for (std::uint64_t bits = on[w]; bits; bits &= bits - 1) {
-            const openvdb::Index pos = openvdb::Index(64 * w + __builtin_ctzll(bits));
-            if (!(own[pos] < phi_limit)) continue;
-            const float f = std::clamp(flux[pos] * inv_26h, -1.0f, 1.0f);
-            if (std::abs(f) < fmin) continue;
-            if (!flux_leaf) flux_leaf = new FloatLeaf(origin, 0.0f, false);
-            flux_leaf->setValueOn(pos, f);
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, leaves.size(), 16),
+      [&](const tbb::blocked_range<std::size_t>& range) {
+        monitor.advance(range.size());
+        FloatGrid::ConstAccessor acc = sdf.getConstAccessor();
+        std::vector<float> phi(kBlock * kBlock * kBlock);
+        float flux[512];
+        auto scratch = std::make_unique<FluxScratch>();
+        for (std::size_t li = range.begin(); li < range.end(); ++li) {
+          const FloatLeaf& leaf = *leaves[li];
+          const Coord origin = leaf.origin();
+          const float* own = leaf.buffer().data();
+          // Bit loops over the mask's words: the interior is dense, and OpenVDB's mask iterators
+          // cost more than the flux itself there.
+          std::uint64_t on[8];
+          for (int w = 0; w < 8; ++w) on[w] = leaf.getValueMask().getWord<std::uint64_t>(w);
+          std::size_t interior = 0;
+          bool any_near = false;  // an active voxel with phi < phi_limit
+          for (int pos = 0; pos < 512; ++pos) {
+            const bool active = (on[pos >> 6] >> (pos & 63)) & 1u;
+            interior += active && own[pos] < 0.0f;
+            any_near |= active && own[pos] < phi_limit;
           }
-      }
-      out.flux[li] = flux_leaf;
-      out.interior[li] = interior;
-      if (store_gradient) {
-        auto* gl = new Vec3SLeaf(origin, openvdb::Vec3s(0.0f), false);
-        for (auto it = leaf.cbeginValueOn(); it; ++it) {
-          const Coord c = it.getCoord() - origin + Coord(kPad);
-          // Central differences, index units (phi difference / 2).
-          const openvdb::Vec3d g(
-              0.5 * double(p_at(c[0] + 1, c[1], c[2]) - p_at(c[0] - 1, c[1], c[2])),
-              0.5 * double(p_at(c[0], c[1] + 1, c[2]) - p_at(c[0], c[1] - 1, c[2])),
-              0.5 * double(p_at(c[0], c[1], c[2] + 1) - p_at(c[0], c[1], c[2] - 1)));
-          const openvdb::Vec3d w = apply_map(gmap.g, g);
-          gl->setValueOn(it.pos(), openvdb::Vec3s(w));
+          FloatLeaf* flux_leaf = nullptr;
+          if (any_near || store_gradient) gather_block(acc, origin, phi.data());
+          auto p_at = [&](int x, int y, int z) { return phi[(x * kBlock + y) * kBlock + z]; };
+          if (any_near) {
+            flux_of_block(phi.data(), flux, *scratch);
+            for (int w = 0; w < 8; ++w)
+              for (std::uint64_t bits = on[w]; bits; bits &= bits - 1) {
+                const openvdb::Index pos = openvdb::Index(64 * w + __builtin_ctzll(bits));
+                if (!(own[pos] < phi_limit)) continue;
+                const float f = std::clamp(flux[pos] * inv_26h, -1.0f, 1.0f);
+                if (std::abs(f) < fmin) continue;
+                if (!flux_leaf) flux_leaf = new FloatLeaf(origin, 0.0f, false);
+                flux_leaf->setValueOn(pos, f);
+              }
+          }
+          out.flux[li] = flux_leaf;
+          out.interior[li] = interior;
+          if (store_gradient) {
+            auto* gl = new Vec3SLeaf(origin, openvdb::Vec3s(0.0f), false);
+            for (auto it = leaf.cbeginValueOn(); it; ++it) {
+              const Coord c = it.getCoord() - origin + Coord(kPad);
+              // Central differences, index units (phi difference / 2).
+              const openvdb::Vec3d g(
+                  0.5 * double(p_at(c[0] + 1, c[1], c[2]) - p_at(c[0] - 1, c[1], c[2])),
+                  0.5 * double(p_at(c[0], c[1] + 1, c[2]) - p_at(c[0], c[1] - 1, c[2])),
+                  0.5 * double(p_at(c[0], c[1], c[2] + 1) - p_at(c[0], c[1], c[2] - 1)));
+              const openvdb::Vec3d w = apply_map(gmap.g, g);
+              gl->setValueOn(it.pos(), openvdb::Vec3s(w));
+            }
+            out.gradient[li] = gl;
+          }
         }
-        out.gradient[li] = gl;
-      }
-    }
-  });
+      });
 
   flux_out = FloatGrid::create(0.0f);
   flux_out->setTransform(sdf.transform().copy());
@@ -200,16 +200,15 @@ void derive_fields(const FloatGrid& sdf, const GradientMap& gmap, double flux_mi
 }  // namespace
 
 std::unique_ptr<Fields> finish_fields(FloatGrid::Ptr sdf, const FieldOptions& options,
-                                      FieldStats stats,
-                                      std::chrono::steady_clock::time_point t0,
+                                      FieldStats stats, std::chrono::steady_clock::time_point t0,
                                       const StageMonitor& monitor) {
   auto impl = std::make_unique<Fields::Impl>();
   impl->gmap = gradient_map(sdf->transform());
   sdf->setName("surface");
   sdf->setGridClass(openvdb::GRID_LEVEL_SET);
   derive_fields(*sdf, impl->gmap, options.flux_min, options.store_gradient, impl->flux,
-                impl->gradient, stats.interior_voxels, stats.seconds_flux,
-                stats.seconds_gradient, monitor);
+                impl->gradient, stats.interior_voxels, stats.seconds_flux, stats.seconds_gradient,
+                monitor);
   impl->sdf = std::move(sdf);
   stats.voxel_size = impl->gmap.voxel_size;
   const openvdb::Coord dim = impl->sdf->evalActiveVoxelBoundingBox().dim();

@@ -66,8 +66,9 @@ inline bool any_bit(const LeafBits& m) {
 /// The bits of `masks` over a leaf and its one-voxel halo: halo[x + 1][y + 1] bit z + 1 is
 /// voxel (x, y, z) of the leaf's frame, x, y, z in [-1, 8]. With `touched` (per leaf, its
 /// mask's touched_neighbours()), neighbours with nothing in the slab facing the leaf are skipped.
-inline void gather_halo_bits(const std::vector<LeafBits>& masks, const std::array<std::int32_t, 27>& nb,
-                      std::uint16_t (&halo)[10][10], const std::uint32_t* touched = nullptr) {
+inline void gather_halo_bits(const std::vector<LeafBits>& masks,
+                             const std::array<std::int32_t, 27>& nb, std::uint16_t (&halo)[10][10],
+                             const std::uint32_t* touched = nullptr) {
   std::memset(halo, 0, sizeof(halo));
   for (int sx = 0; sx < 3; ++sx)
     for (int sy = 0; sy < 3; ++sy)
@@ -86,8 +87,8 @@ inline void gather_halo_bits(const std::vector<LeafBits>& masks, const std::arra
           for (int y = y0; y < y1; ++y) {
             const unsigned row = unsigned(m[x] >> (8 * y)) & 0xffu;
             const int hy = sy == 0 ? 0 : (sy == 1 ? y + 1 : 9);
-            halo[hx][hy] |= std::uint16_t(sz == 1 ? row << 1
-                                                  : (sz == 0 ? (row >> 7) & 1u : (row & 1u) << 9));
+            halo[hx][hy] |=
+                std::uint16_t(sz == 1 ? row << 1 : (sz == 0 ? (row >> 7) & 1u : (row & 1u) << 9));
           }
         }
       }
@@ -96,8 +97,9 @@ inline void gather_halo_bits(const std::vector<LeafBits>& masks, const std::arra
 /// The triangles of the voxels in `known` over a leaf and a halo of kW voxels,
 /// block[((x + kW) * kN + y + kW) * kN + z + kW] with kN = 8 + 2 kW; -1 elsewhere.
 template <int kW>
-inline void gather_ids_block(const std::vector<LeafBits>& known, const std::array<std::int32_t, 27>& nb,
-                      const std::int32_t* ids, std::int32_t* block) {
+inline void gather_ids_block(const std::vector<LeafBits>& known,
+                             const std::array<std::int32_t, 27>& nb, const std::int32_t* ids,
+                             std::int32_t* block) {
   constexpr int kN = 8 + 2 * kW;
   for (int x = -kW; x < 8 + kW; ++x)
     for (int y = -kW; y < 8 + kW; ++y) {

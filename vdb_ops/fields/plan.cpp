@@ -83,9 +83,12 @@ openvdb::Vec3d apply_map(const Mat3& m, const openvdb::Vec3d& v) {
 
 const char* method_name(SdfMethod m) {
   switch (m) {
-    case SdfMethod::kExactInterior: return "voxelized band + closest-triangle wavefront";
-    case SdfMethod::kMeshToVolumeInterior: return "meshToVolume exact interior";
-    case SdfMethod::kFastSweeping: break;
+    case SdfMethod::kExactInterior:
+      return "voxelized band + closest-triangle wavefront";
+    case SdfMethod::kMeshToVolumeInterior:
+      return "meshToVolume exact interior";
+    case SdfMethod::kFastSweeping:
+      break;
   }
   return "narrow band + fast sweeping interior";
 }
@@ -190,12 +193,11 @@ FieldPlan plan_fields(const SurfaceMesh& mesh, const FieldOptions& options) {
   const double budget = options.max_memory_gb * kGiB;
   if (bytes > budget) {
     const double scale = std::cbrt(budget / bytes);
-    throw ResourceError("the fields at resolution " + std::to_string(plan.resolution) +
-                        " (voxel size " + format_double(h) + ") need about " + format_gb(bytes) +
-                        ", more than --max-memory " + format_double(options.max_memory_gb) +
-                        " GiB; lower --resolution (about " +
-                        std::to_string(int(plan.resolution * scale)) +
-                        " fits) or raise --max-memory");
+    throw ResourceError(
+        "the fields at resolution " + std::to_string(plan.resolution) + " (voxel size " +
+        format_double(h) + ") need about " + format_gb(bytes) + ", more than --max-memory " +
+        format_double(options.max_memory_gb) + " GiB; lower --resolution (about " +
+        std::to_string(int(plan.resolution * scale)) + " fits) or raise --max-memory");
   }
   const double physical = physical_memory_bytes();
   if (physical > 0.0 && bytes > 0.9 * physical) {

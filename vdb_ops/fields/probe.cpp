@@ -19,8 +19,8 @@ class VdbProbe final : public FieldProbe {
         xform_(f.sdf->transform()),
         sdf_acc_(f.sdf->getConstAccessor()),
         flux_acc_(f.flux->getConstAccessor()) {
-    if (f.gradient) grad_acc_ = std::make_unique<Vec3SGrid::ConstAccessor>(
-                        f.gradient->getConstAccessor());
+    if (f.gradient)
+      grad_acc_ = std::make_unique<Vec3SGrid::ConstAccessor>(f.gradient->getConstAccessor());
   }
 
   double phi(const Vec3d& p) override {
@@ -46,8 +46,8 @@ class VdbProbe final : public FieldProbe {
     for (int cx = 0; cx < 2; ++cx)
       for (int cy = 0; cy < 2; ++cy)
         for (int cz = 0; cz < 2; ++cz) {
-          const double w = (cx ? t[0] : 1.0 - t[0]) * (cy ? t[1] : 1.0 - t[1]) *
-                           (cz ? t[2] : 1.0 - t[2]);
+          const double w =
+              (cx ? t[0] : 1.0 - t[0]) * (cy ? t[1] : 1.0 - t[1]) * (cz ? t[2] : 1.0 - t[2]);
           const int x = cx + 1, y = cy + 1, z = cz + 1;
           g[0] += w * 0.5 * double(v[x + 1][y][z] - v[x - 1][y][z]);
           g[1] += w * 0.5 * double(v[x][y + 1][z] - v[x][y - 1][z]);
@@ -85,11 +85,10 @@ class VdbProbe final : public FieldProbe {
           const int inner = (i == 1 || i == 2) + (j == 1 || j == 2) + (k == 1 || k == 2);
           if (inner < 2) continue;  // corners and edges of the 4^3 block are not needed
           const int x = lo[0] + i, y = lo[1] + j, z = lo[2] + k;
-          const int a = (x - lo_leaf[0]) >> 3, b = (y - lo_leaf[1]) >> 3,
-                    c = (z - lo_leaf[2]) >> 3;
+          const int a = (x - lo_leaf[0]) >> 3, b = (y - lo_leaf[1]) >> 3, c = (z - lo_leaf[2]) >> 3;
           const FloatLeaf* leaf = leaves[a][b][c];
-          v[i][j][k] = leaf ? leaf->getValue(((x & 7) << 6) | ((y & 7) << 3) | (z & 7))
-                            : tiles[a][b][c];
+          v[i][j][k] =
+              leaf ? leaf->getValue(((x & 7) << 6) | ((y & 7) << 3) | (z & 7)) : tiles[a][b][c];
         }
   }
 

@@ -62,68 +62,69 @@ double point_triangle_distance2(const openvdb::Vec3d& p, const openvdb::Vec3d& a
 /// Only |phi| decreases (every candidate is a true distance to a triangle); signs are kept.
 /// Reads triangle ids, writes only each voxel's own phi: deterministic for any thread count.
 void refine_by_neighbours_jacobi(FloatGrid& sdf, const openvdb::Int32Grid& index_grid,
-                                     const IndexMesh& m) {
+                                 const IndexMesh& m) {
   using IntLeaf = openvdb::Int32Tree::LeafNodeType;
   std::vector<FloatLeaf*> leaves;
   leaves.reserve(sdf.tree().leafCount());
   sdf.tree().getNodes(leaves);
   const double h = sdf.voxelSize()[0];
   const std::int32_t n_tris = std::int32_t(m.triangles.size());
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size(), 16),
-                    [&](const tbb::blocked_range<std::size_t>& range) {
-    openvdb::Int32Grid::ConstAccessor acc = index_grid.getConstAccessor();
-    constexpr int kB = 10;  // leaf plus one voxel each side
-    std::array<std::int32_t, kB * kB * kB> ids;
-    for (std::size_t li = range.begin(); li < range.end(); ++li) {
-      FloatLeaf& leaf = *leaves[li];
-      const Coord origin = leaf.origin();
-      for (int nx = -1; nx <= 1; ++nx)
-        for (int ny = -1; ny <= 1; ++ny)
-          for (int nz = -1; nz <= 1; ++nz) {
-            const IntLeaf* il = acc.probeConstLeaf(origin.offsetBy(nx * 8, ny * 8, nz * 8));
-            auto lo = [](int n) { return n < 0 ? 0 : (n == 0 ? 1 : 9); };
-            auto hi = [](int n) { return n < 0 ? 1 : (n == 0 ? 9 : 10); };
-            for (int bx = lo(nx); bx < hi(nx); ++bx)
-              for (int by = lo(ny); by < hi(ny); ++by)
-                for (int bz = lo(nz); bz < hi(nz); ++bz) {
-                  std::int32_t id = -1;
-                  if (il) {
-                    const openvdb::Index pos =
-                        (((bx - 1) & 7) << 6) | (((by - 1) & 7) << 3) | ((bz - 1) & 7);
-                    if (il->isValueOn(pos)) id = il->getValue(pos);
-                  }
-                  ids[(bx * kB + by) * kB + bz] = id;
-                }
-          }
-      for (auto it = leaf.beginValueOn(); it; ++it) {
-        const Coord c = it.getCoord() - origin;
-        const std::int32_t own = ids[((c[0] + 1) * kB + c[1] + 1) * kB + c[2] + 1];
-        std::array<std::int32_t, 27> cand;
-        int n = 0;
-        for (int dx = 0; dx < 3; ++dx)
-          for (int dy = 0; dy < 3; ++dy)
-            for (int dz = 0; dz < 3; ++dz) {
-              const std::int32_t id = ids[((c[0] + dx) * kB + c[1] + dy) * kB + c[2] + dz];
-              if (id < 0 || id >= n_tris || id == own) continue;
-              if (std::find(cand.begin(), cand.begin() + n, id) == cand.begin() + n) {
-                cand[n++] = id;
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, leaves.size(), 16),
+      [&](const tbb::blocked_range<std::size_t>& range) {
+        openvdb::Int32Grid::ConstAccessor acc = index_grid.getConstAccessor();
+        constexpr int kB = 10;  // leaf plus one voxel each side
+        std::array<std::int32_t, kB * kB * kB> ids;
+        for (std::size_t li = range.begin(); li < range.end(); ++li) {
+          FloatLeaf& leaf = *leaves[li];
+          const Coord origin = leaf.origin();
+          for (int nx = -1; nx <= 1; ++nx)
+            for (int ny = -1; ny <= 1; ++ny)
+              for (int nz = -1; nz <= 1; ++nz) {
+                const IntLeaf* il = acc.probeConstLeaf(origin.offsetBy(nx * 8, ny * 8, nz * 8));
+                auto lo = [](int n) { return n < 0 ? 0 : (n == 0 ? 1 : 9); };
+                auto hi = [](int n) { return n < 0 ? 1 : (n == 0 ? 9 : 10); };
+                for (int bx = lo(nx); bx < hi(nx); ++bx)
+                  for (int by = lo(ny); by < hi(ny); ++by)
+                    for (int bz = lo(nz); bz < hi(nz); ++bz) {
+                      std::int32_t id = -1;
+                      if (il) {
+                        const openvdb::Index pos =
+                            (((bx - 1) & 7) << 6) | (((by - 1) & 7) << 3) | ((bz - 1) & 7);
+                        if (il->isValueOn(pos)) id = il->getValue(pos);
+                      }
+                      ids[(bx * kB + by) * kB + bz] = id;
+                    }
               }
+          for (auto it = leaf.beginValueOn(); it; ++it) {
+            const Coord c = it.getCoord() - origin;
+            const std::int32_t own = ids[((c[0] + 1) * kB + c[1] + 1) * kB + c[2] + 1];
+            std::array<std::int32_t, 27> cand;
+            int n = 0;
+            for (int dx = 0; dx < 3; ++dx)
+              for (int dy = 0; dy < 3; ++dy)
+                for (int dz = 0; dz < 3; ++dz) {
+                  const std::int32_t id = ids[((c[0] + dx) * kB + c[1] + dy) * kB + c[2] + dz];
+                  if (id < 0 || id >= n_tris || id == own) continue;
+                  if (std::find(cand.begin(), cand.begin() + n, id) == cand.begin() + n) {
+                    cand[n++] = id;
+                  }
+                }
+            if (n == 0) continue;
+            const openvdb::Vec3d p = it.getCoord().asVec3d();
+            const float phi = *it;
+            double best = double(std::abs(phi)) / h;
+            best *= best;
+            for (int k = 0; k < n; ++k) {
+              const openvdb::Vec3I& t = m.triangles[std::size_t(cand[k])];
+              best = std::min(best, point_triangle_distance2(p, m.points[t[0]], m.points[t[1]],
+                                                             m.points[t[2]]));
             }
-        if (n == 0) continue;
-        const openvdb::Vec3d p = it.getCoord().asVec3d();
-        const float phi = *it;
-        double best = double(std::abs(phi)) / h;
-        best *= best;
-        for (int k = 0; k < n; ++k) {
-          const openvdb::Vec3I& t = m.triangles[std::size_t(cand[k])];
-          best = std::min(best, point_triangle_distance2(p, m.points[t[0]], m.points[t[1]],
-                                                         m.points[t[2]]));
+            const float d = float(std::sqrt(best) * h);
+            if (d < std::abs(phi)) it.setValue(phi < 0.0f ? -d : d);
+          }
         }
-        const float d = float(std::sqrt(best) * h);
-        if (d < std::abs(phi)) it.setValue(phi < 0.0f ? -d : d);
-      }
-    }
-  });
+      });
 }
 
 /// `masks` dilated by one voxel (26-neighbourhood), for every leaf.
@@ -131,24 +132,24 @@ std::vector<LeafBits> dilate_bits(const LeafTable& table, const std::vector<Leaf
   std::vector<LeafBits> out(masks.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, masks.size(), 64),
                     [&](const tbb::blocked_range<std::size_t>& range) {
-    for (std::size_t li = range.begin(); li < range.end(); ++li) {
-      std::uint16_t halo[10][10];
-      gather_halo_bits(masks, table.neighbours[li], halo);
-      std::uint16_t grown[10][10];
-      for (int x = 0; x < 10; ++x)
-        for (int y = 0; y < 10; ++y) {
-          const unsigned v = halo[x][y];
-          grown[x][y] = std::uint16_t(v | (v << 1) | (v >> 1));
-        }
-      for (int x = 0; x < 8; ++x)
-        for (int y = 0; y < 8; ++y) {
-          unsigned near = 0;
-          for (int a = 0; a < 3; ++a)
-            for (int b = 0; b < 3; ++b) near |= grown[x + a][y + b];
-          out[li][x] |= std::uint64_t((near >> 1) & 0xffu) << (8 * y);
-        }
-    }
-  });
+                      for (std::size_t li = range.begin(); li < range.end(); ++li) {
+                        std::uint16_t halo[10][10];
+                        gather_halo_bits(masks, table.neighbours[li], halo);
+                        std::uint16_t grown[10][10];
+                        for (int x = 0; x < 10; ++x)
+                          for (int y = 0; y < 10; ++y) {
+                            const unsigned v = halo[x][y];
+                            grown[x][y] = std::uint16_t(v | (v << 1) | (v >> 1));
+                          }
+                        for (int x = 0; x < 8; ++x)
+                          for (int y = 0; y < 8; ++y) {
+                            unsigned near = 0;
+                            for (int a = 0; a < 3; ++a)
+                              for (int b = 0; b < 3; ++b) near |= grown[x + a][y + b];
+                            out[li][x] |= std::uint64_t((near >> 1) & 0xffu) << (8 * y);
+                          }
+                      }
+                    });
   return out;
 }
 
@@ -176,36 +177,37 @@ void mark_medial_seeds(const LeafTable& table, const std::vector<LeafBits>& know
                        const std::vector<LeafBits>& seeds, const std::int32_t* ids,
                        const std::vector<TriangleF>& tris, const NeighbourOffsets& offsets,
                        std::vector<LeafBits>& medial) {
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, table.leaves.size(), 16),
-                    [&](const tbb::blocked_range<std::size_t>& range) {
-    std::int32_t block[1000];
-    for (std::size_t li = range.begin(); li < range.end(); ++li) {
-      if (!any_bit(seeds[li])) continue;
-      gather_ids_block<1>(known, table.neighbours[li], ids, block);
-      for (int x = 0; x < 8; ++x)
-        for (std::uint64_t bits = seeds[li][x]; bits; bits &= bits - 1) {
-          const int b = __builtin_ctzll(bits), y = b >> 3, z = b & 7;
-          const int c = ((x + 1) * 10 + y + 1) * 10 + z + 1;
-          const std::int32_t own = block[c];
-          for (int k : offsets.halo1) {
-            const std::int32_t id = block[c + k];
-            if (id >= 0 && id != own &&
-                dot3(tris[std::size_t(own)].n, tris[std::size_t(id)].n) < kMedialNormalCos) {
-              medial[li][x] |= std::uint64_t(1) << b;
-              break;
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, table.leaves.size(), 16),
+      [&](const tbb::blocked_range<std::size_t>& range) {
+        std::int32_t block[1000];
+        for (std::size_t li = range.begin(); li < range.end(); ++li) {
+          if (!any_bit(seeds[li])) continue;
+          gather_ids_block<1>(known, table.neighbours[li], ids, block);
+          for (int x = 0; x < 8; ++x)
+            for (std::uint64_t bits = seeds[li][x]; bits; bits &= bits - 1) {
+              const int b = __builtin_ctzll(bits), y = b >> 3, z = b & 7;
+              const int c = ((x + 1) * 10 + y + 1) * 10 + z + 1;
+              const std::int32_t own = block[c];
+              for (int k : offsets.halo1) {
+                const std::int32_t id = block[c + k];
+                if (id >= 0 && id != own &&
+                    dot3(tris[std::size_t(own)].n, tris[std::size_t(id)].n) < kMedialNormalCos) {
+                  medial[li][x] |= std::uint64_t(1) << b;
+                  break;
+                }
+              }
             }
-          }
         }
-    }
-  });
+      });
 }
 
 /// Step 2, one thread's share: lowers phi at the voxels of a leaf to the distance to the
 /// triangles of their 5^3 neighbourhoods.
 class NeighbourhoodRefiner {
  public:
-  NeighbourhoodRefiner(const std::vector<TriangleF>& tris, float h,
-                       const NeighbourOffsets& offsets, TriangleSlots& map)
+  NeighbourhoodRefiner(const std::vector<TriangleF>& tris, float h, const NeighbourOffsets& offsets,
+                       TriangleSlots& map)
       : tris_(tris), h_(h), offsets_(offsets), map_(map) {}
 
   /// The voxels `todo` of `leaf`, whose 12^3 block of triangles (leaf and halo 2) is `block()`.
@@ -349,15 +351,15 @@ void refine_medial_voxels(const LeafTable& table, const std::vector<LeafBits>& k
   tbb::enumerable_thread_specific<TriangleSlots> slots(TriangleSlots(tris.size()));
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, table.leaves.size(), 16),
                     [&](const tbb::blocked_range<std::size_t>& range) {
-    NeighbourhoodRefiner refiner(tris, h, offsets, slots.local());
-    for (std::size_t li = range.begin(); li < range.end(); ++li) {
-      LeafBits todo = wide[li];
-      for (int x = 0; x < 8; ++x) todo[x] &= known[li][x];
-      if (!any_bit(todo)) continue;
-      gather_ids_block<2>(known, table.neighbours[li], ids, refiner.block());
-      refiner.refine_leaf(*table.leaves[li], todo);
-    }
-  });
+                      NeighbourhoodRefiner refiner(tris, h, offsets, slots.local());
+                      for (std::size_t li = range.begin(); li < range.end(); ++li) {
+                        LeafBits todo = wide[li];
+                        for (int x = 0; x < 8; ++x) todo[x] &= known[li][x];
+                        if (!any_bit(todo)) continue;
+                        gather_ids_block<2>(known, table.neighbours[li], ids, refiner.block());
+                        refiner.refine_leaf(*table.leaves[li], todo);
+                      }
+                    });
 }
 
 }  // namespace fields_detail

@@ -75,11 +75,11 @@ std::uint64_t band_leaf_key(const Coord& c) {
 
 /// One thread's voxelization: its leaves, and scratch space for one triangle at a time.
 struct BandVoxels {
-  std::unordered_map<std::uint64_t, std::size_t> slot;  ///< leaf key -> index in `leaves`
+  std::unordered_map<std::uint64_t, std::size_t> slot;    ///< leaf key -> index in `leaves`
   std::deque<std::pair<std::uint64_t, BandLeaf>> leaves;  ///< a deque: kept by address
-  std::vector<BandLeaf*> box_leaves;   ///< the leaves over the triangle's box (null: not yet)
-  std::vector<std::uint64_t> bits;     ///< bit rows (fast path) or visited marks (flood fill)
-  std::vector<float> measured;         ///< squared distances measured near the plane
+  std::vector<BandLeaf*> box_leaves;  ///< the leaves over the triangle's box (null: not yet)
+  std::vector<std::uint64_t> bits;    ///< bit rows (fast path) or visited marks (flood fill)
+  std::vector<float> measured;        ///< squared distances measured near the plane
   std::vector<Coord> stack;
   std::size_t flood_filled = 0;  ///< triangles voxelized by the flood fill
 
@@ -88,9 +88,9 @@ struct BandVoxels {
     const auto [it, added] = slot.emplace(key, leaves.size());
     if (added) {
       const Coord origin(ijk[0] & ~7, ijk[1] & ~7, ijk[2] & ~7);
-      BandLeaf leaf{std::make_unique<FloatLeaf>(origin, std::numeric_limits<float>::max(), false),
-                    std::make_unique<Int32Leaf>(origin, std::int32_t(openvdb::util::INVALID_IDX),
-                                                false)};
+      BandLeaf leaf{
+          std::make_unique<FloatLeaf>(origin, std::numeric_limits<float>::max(), false),
+          std::make_unique<Int32Leaf>(origin, std::int32_t(openvdb::util::INVALID_IDX), false)};
       leaf.d2 = leaf.dist->buffer().data();
       leaf.id = leaf.index->buffer().data();
       leaves.emplace_back(key, std::move(leaf));
@@ -133,10 +133,10 @@ void band_voxelize_triangle(const IndexMesh& m, std::size_t index, BandVoxels& o
   const std::int32_t id = std::int32_t(index);
   const Coord f = Coord::floor(a);
   // Every reached voxel lies within 2 of the triangle's bounding box.
-  const Coord lo = Coord::floor(openvdb::math::minComponent(openvdb::math::minComponent(a, b), c))
-                       .offsetBy(-2);
-  const Coord hi = Coord::floor(openvdb::math::maxComponent(openvdb::math::maxComponent(a, b), c))
-                       .offsetBy(2);
+  const Coord lo =
+      Coord::floor(openvdb::math::minComponent(openvdb::math::minComponent(a, b), c)).offsetBy(-2);
+  const Coord hi =
+      Coord::floor(openvdb::math::maxComponent(openvdb::math::maxComponent(a, b), c)).offsetBy(2);
   const int nx = hi[0] - lo[0] + 1, ny = hi[1] - lo[1] + 1, nz = hi[2] - lo[2] + 1;
   const std::size_t volume = std::size_t(nx) * std::size_t(ny) * std::size_t(nz);
   const Coord leaf_lo(lo[0] >> 3, lo[1] >> 3, lo[2] >> 3);
@@ -263,8 +263,8 @@ bool band_voxels_apply(const IndexMesh& m) {
       lo = openvdb::math::minComponent(lo, openvdb::Vec3d(m.points[t[k]]));
       hi = openvdb::math::maxComponent(hi, openvdb::Vec3d(m.points[t[k]]));
     }
-    if (!(lo[0] > -4.0e6 && lo[1] > -4.0e6 && lo[2] > -4.0e6 && hi[0] < 4.0e6 &&
-          hi[1] < 4.0e6 && hi[2] < 4.0e6)) {
+    if (!(lo[0] > -4.0e6 && lo[1] > -4.0e6 && lo[2] > -4.0e6 && hi[0] < 4.0e6 && hi[1] < 4.0e6 &&
+          hi[2] < 4.0e6)) {
       return false;
     }
     const openvdb::Vec3d d = hi - lo + openvdb::Vec3d(5.0);
@@ -275,7 +275,6 @@ bool band_voxels_apply(const IndexMesh& m) {
 
 namespace {
 
-
 /// meshToVolume's distance and index trees after voxelization (see above), leaf for leaf.
 /// Returns the number of triangles voxelized by the flood fill.
 std::size_t band_voxels(const IndexMesh& m, FloatTree& dist, openvdb::Int32Tree& index) {
@@ -283,10 +282,11 @@ std::size_t band_voxels(const IndexMesh& m, FloatTree& dist, openvdb::Int32Tree&
   const StageMonitor* monitor = StageMonitor::active();  // build_fields()'s, checked per range
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m.triangles.size(), 64),
                     [&](const tbb::blocked_range<std::size_t>& range) {
-    if (monitor) monitor->check();
-    BandVoxels& out = threads.local();
-    for (std::size_t i = range.begin(); i < range.end(); ++i) band_voxelize_triangle(m, i, out);
-  });
+                      if (monitor) monitor->check();
+                      BandVoxels& out = threads.local();
+                      for (std::size_t i = range.begin(); i < range.end(); ++i)
+                        band_voxelize_triangle(m, i, out);
+                    });
   // Leaves of the same key from different threads: the smaller distance, then the smaller index
   // (the same whatever the order, as in meshToVolume's own merge).
   std::vector<std::pair<std::uint64_t, BandLeaf*>> all;
@@ -303,16 +303,16 @@ std::size_t band_voxels(const IndexMesh& m, FloatTree& dist, openvdb::Int32Tree&
   first.push_back(all.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, first.size() - 1, 64),
                     [&](const tbb::blocked_range<std::size_t>& range) {
-    for (std::size_t j = range.begin(); j < range.end(); ++j) {
-      BandLeaf& to = *all[first[j]].second;
-      for (std::size_t k = first[j] + 1; k < first[j + 1]; ++k) {
-        const BandLeaf& from = *all[k].second;
-        for (auto it = from.dist->cbeginValueOn(); it; ++it) {
-          band_keep(to, it.getCoord(), *it, from.index->getValue(it.pos()));
-        }
-      }
-    }
-  });
+                      for (std::size_t j = range.begin(); j < range.end(); ++j) {
+                        BandLeaf& to = *all[first[j]].second;
+                        for (std::size_t k = first[j] + 1; k < first[j + 1]; ++k) {
+                          const BandLeaf& from = *all[k].second;
+                          for (auto it = from.dist->cbeginValueOn(); it; ++it) {
+                            band_keep(to, it.getCoord(), *it, from.index->getValue(it.pos()));
+                          }
+                        }
+                      }
+                    });
   for (std::size_t j = 0; j + 1 < first.size(); ++j) {
     BandLeaf& leaf = *all[first[j]].second;
     dist.addLeaf(leaf.dist.release());
@@ -355,9 +355,8 @@ FloatGrid::Ptr mesh_to_band(const IndexMesh& m, const openvdb::math::Transform& 
   nodes.reserve(dist.leafCount());
   dist.getNodes(nodes);
   const tbb::blocked_range<std::size_t> range(0, nodes.size());
-  tbb::parallel_for(range,
-                    internal::ComputeIntersectingVoxelSign<FloatTree, Adapter>(nodes, dist, index,
-                                                                               adapter));
+  tbb::parallel_for(range, internal::ComputeIntersectingVoxelSign<FloatTree, Adapter>(
+                               nodes, dist, index, adapter));
   tbb::parallel_for(range, internal::ValidateIntersectingVoxels<FloatTree>(dist, nodes));
   tbb::parallel_for(range, internal::RemoveSelfIntersectingSurface<FloatTree>(nodes, dist, index));
   openvdb::tools::pruneInactive(dist, /*threaded=*/true);
@@ -400,9 +399,9 @@ SeedBandComparison compare_seed_band(const SurfaceMesh& mesh, const FieldOptions
       mesh_to_band(im, *xform, kSeedBandVoxels, kSeedBandVoxels, ours_index, &flood_filled);
   out.seconds = seconds_since(t0);
   t0 = std::chrono::steady_clock::now();
-  const FloatGrid::Ptr theirs = mesh_to_volume(im, *xform, kSeedBandVoxels, kSeedBandVoxels,
-                                               &their_index,
-                                               openvdb::tools::DISABLE_RENORMALIZATION);
+  const FloatGrid::Ptr theirs =
+      mesh_to_volume(im, *xform, kSeedBandVoxels, kSeedBandVoxels, &their_index,
+                     openvdb::tools::DISABLE_RENORMALIZATION);
   out.seconds_mesh_to_volume = seconds_since(t0);
   out.voxelized_here = band_voxels_apply(im);
   out.flood_filled = flood_filled;
@@ -446,7 +445,6 @@ SeedBandComparison compare_seed_band(const SurfaceMesh& mesh, const FieldOptions
   return out;
 }
 
-
 FieldStats build_narrow_band_reference(const SurfaceMesh& mesh, const FieldOptions& options) {
   init_openvdb();
   const FieldPlan plan = plan_fields(mesh, options);
@@ -460,8 +458,8 @@ FieldStats build_narrow_band_reference(const SurfaceMesh& mesh, const FieldOptio
   for (const Triangle& t : mesh.triangles) triangles.emplace_back(t[0], t[1], t[2]);
   const auto t0 = std::chrono::steady_clock::now();
   openvdb::util::NullInterrupter interrupter;
-  FloatGrid::Ptr grid = openvdb::tools::meshToLevelSet<FloatGrid>(interrupter, *xform, points,
-                                                                  triangles, 3.0f);
+  FloatGrid::Ptr grid =
+      openvdb::tools::meshToLevelSet<FloatGrid>(interrupter, *xform, points, triangles, 3.0f);
   FieldStats stats;
   stats.strategy = "meshToLevelSet narrow band, half-width 3";
   stats.source = "mesh";

@@ -93,9 +93,9 @@ class HashingBuf final : public std::streambuf {
     if (!is_uuid(uuid_)) return "";
     std::uint64_t hi = hash_, lo = hash_ ^ (bytes_ * 0x9e3779b97f4a7c15ull);
     lo ^= lo >> 30, lo *= 0xbf58476d1ce4e5b9ull, lo ^= lo >> 27, lo *= 0x94d049bb133111ebull;
-    lo ^= lo >> 31;  // splitmix64 finaliser
-    hi = (hi & ~0xf000ull) | 0x8000ull;                      // version 8
-    lo = (lo & ~(0x3ull << 62)) | (0x2ull << 62);            // variant 10
+    lo ^= lo >> 31;                                // splitmix64 finaliser
+    hi = (hi & ~0xf000ull) | 0x8000ull;            // version 8
+    lo = (lo & ~(0x3ull << 62)) | (0x2ull << 62);  // variant 10
     char buf[40];
     std::snprintf(buf, sizeof buf, "%08llx-%04llx-%04llx-%04llx-%012llx",
                   static_cast<unsigned long long>(hi >> 32),
@@ -143,12 +143,10 @@ class HashingBuf final : public std::streambuf {
   std::string uuid_;
 };
 
-
 }  // namespace
 
 void write_grids(const std::string& path, const Fields& fields,
-                 const std::map<std::string, std::string>& metadata,
-                 const TraceResult* traces) {
+                 const std::map<std::string, std::string>& metadata, const TraceResult* traces) {
   init_openvdb();
   auto tag = [&](openvdb::MetaMap& m) {
     for (const auto& [k, v] : fields.parameters()) m.insertMeta(k, openvdb::StringMetadata(v));

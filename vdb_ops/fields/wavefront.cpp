@@ -61,14 +61,14 @@ void activate_interior(FloatTree& tree) {
   tree.getNodes(leaves);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size(), 64),
                     [&](const tbb::blocked_range<std::size_t>& range) {
-    for (std::size_t i = range.begin(); i < range.end(); ++i) {
-      FloatLeaf& leaf = *leaves[i];
-      const float* phi = leaf.buffer().data();
-      for (auto off = leaf.getValueMask().beginOff(); off; ++off) {
-        if (phi[off.pos()] < 0.0f) leaf.setValueOn(off.pos());
-      }
-    }
-  });
+                      for (std::size_t i = range.begin(); i < range.end(); ++i) {
+                        FloatLeaf& leaf = *leaves[i];
+                        const float* phi = leaf.buffer().data();
+                        for (auto off = leaf.getValueMask().beginOff(); off; ++off) {
+                          if (phi[off.pos()] < 0.0f) leaf.setValueOn(off.pos());
+                        }
+                      }
+                    });
   for (const auto& [box, value] : tiles) tree.fill(box, value, true);
   tree.voxelizeActiveTiles(true);
 }
@@ -90,16 +90,17 @@ LeafTable make_leaf_table(FloatTree& tree) {
   t.origins.resize(t.leaves.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, t.leaves.size(), 256),
                     [&](const tbb::blocked_range<std::size_t>& range) {
-    openvdb::tree::ValueAccessor<const openvdb::Int32Tree> acc(index_of);
-    for (std::size_t i = range.begin(); i < range.end(); ++i) {
-      t.values[i] = t.leaves[i]->buffer().data();
-      t.origins[i] = t.leaves[i]->origin();
-      const Coord c = t.origins[i] >> 3;
-      for (int s = 0; s < 27; ++s) {
-        t.neighbours[i][s] = acc.getValue(c.offsetBy(s / 9 - 1, s / 3 % 3 - 1, s % 3 - 1));
-      }
-    }
-  });
+                      openvdb::tree::ValueAccessor<const openvdb::Int32Tree> acc(index_of);
+                      for (std::size_t i = range.begin(); i < range.end(); ++i) {
+                        t.values[i] = t.leaves[i]->buffer().data();
+                        t.origins[i] = t.leaves[i]->origin();
+                        const Coord c = t.origins[i] >> 3;
+                        for (int s = 0; s < 27; ++s) {
+                          t.neighbours[i][s] =
+                              acc.getValue(c.offsetBy(s / 9 - 1, s / 3 % 3 - 1, s % 3 - 1));
+                        }
+                      }
+                    });
   return t;
 }
 
@@ -212,9 +213,9 @@ void Wavefront::seed(const openvdb::Int32Grid& index_grid) {
   fresh_touched_[1].resize(n_);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_, 64),
                     [&](const tbb::blocked_range<std::size_t>& range) {
-    openvdb::Int32Grid::ConstAccessor acc = index_grid.getConstAccessor();
-    for (std::size_t i = range.begin(); i < range.end(); ++i) seed_leaf(i, acc);
-  });
+                      openvdb::Int32Grid::ConstAccessor acc = index_grid.getConstAccessor();
+                      for (std::size_t i = range.begin(); i < range.end(); ++i) seed_leaf(i, acc);
+                    });
   seeds_ = known_;
   for (std::size_t i = 0; i < n_; ++i) {
     if (any_bit(todo_[i])) active_.push_back(std::int32_t(i));
@@ -274,23 +275,24 @@ void Wavefront::run(const StageMonitor& monitor) {
     const float limit2 = limit * limit;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, active_.size(), 4),
                       [&](const tbb::blocked_range<std::size_t>& range) {
-      monitor.check();
-      LeafScratch scratch;
-      TriangleSlots& map = slots.local();
-      for (std::size_t j = range.begin(); j < range.end(); ++j) {
-        // The leaves of an iteration are far apart in memory and their triangles and distances
-        // were written iterations ago: fetching them a few leaves ahead hides most misses.
-        if (j + 3 < range.end()) prefetch_leaf(std::size_t(active_[j + 3]), touched_in);
-        step_leaf(std::size_t(active_[j]), fresh_in, touched_in, fresh_out, touched_out, limit2,
-                  scratch, map);
-      }
-    });
+                        monitor.check();
+                        LeafScratch scratch;
+                        TriangleSlots& map = slots.local();
+                        for (std::size_t j = range.begin(); j < range.end(); ++j) {
+                          // The leaves of an iteration are far apart in memory and their triangles
+                          // and distances were written iterations ago: fetching them a few leaves
+                          // ahead hides most misses.
+                          if (j + 3 < range.end())
+                            prefetch_leaf(std::size_t(active_[j + 3]), touched_in);
+                          step_leaf(std::size_t(active_[j]), fresh_in, touched_in, fresh_out,
+                                    touched_out, limit2, scratch, map);
+                        }
+                      });
     list_next_leaves(iteration);
   }
 }
 
-void Wavefront::prefetch_leaf(std::size_t lp,
-                              const std::vector<std::uint32_t>& touched_in) const {
+void Wavefront::prefetch_leaf(std::size_t lp, const std::vector<std::uint32_t>& touched_in) const {
   const char* a = reinterpret_cast<const char*>(&(*ids_)[lp * 512]);
   const char* b = reinterpret_cast<const char*>(table_.values[lp]);
   for (int k = 0; k < 2048; k += 64) {
@@ -318,9 +320,8 @@ void Wavefront::prefetch_leaf(std::size_t lp,
 
 void Wavefront::step_leaf(std::size_t li, const std::vector<LeafBits>& fresh_in,
                           const std::vector<std::uint32_t>& touched_in,
-                          std::vector<LeafBits>& fresh_out,
-                          std::vector<std::uint32_t>& touched_out, float limit2,
-                          LeafScratch& scratch, TriangleSlots& map) {
+                          std::vector<LeafBits>& fresh_out, std::vector<std::uint32_t>& touched_out,
+                          float limit2, LeafScratch& scratch, TriangleSlots& map) {
   std::uint16_t halo[10][10];
   gather_halo_bits(fresh_in, table_.neighbours[li], halo, touched_in.data());
   bool any_fresh = false;
@@ -357,8 +358,8 @@ void Wavefront::gather_fresh_triangles(std::size_t li, const std::uint16_t (&hal
         const int hz = __builtin_ctz(row);
         const int x = hx - 1, y = hy - 1, z = hz - 1;
         const std::int32_t ni = nb[(((x + 8) >> 3) * 3 + ((y + 8) >> 3)) * 3 + ((z + 8) >> 3)];
-        const std::int32_t id = (*ids_)[std::size_t(ni) * 512 +
-                                        std::size_t(((x & 7) << 6) | ((y & 7) << 3) | (z & 7))];
+        const std::int32_t id =
+            (*ids_)[std::size_t(ni) * 512 + std::size_t(((x & 7) << 6) | ((y & 7) << 3) | (z & 7))];
         const int c = (hx * 10 + hy) * 10 + hz;
         scratch.block[c] = id;
         if (!scratch.by_words) continue;
@@ -393,8 +394,7 @@ void Wavefront::measure_front(std::size_t li, const std::uint16_t (&halo)[10][10
         const std::uint64_t bit = std::uint64_t(1) << ((y << 3) | z);
         const bool has = (tn[x] & bit) != 0;
         std::int32_t best_id = has ? own[pos] : -1;
-        float best =
-            has ? (phi[pos] / h) * (phi[pos] / h) : std::numeric_limits<float>::max();
+        float best = has ? (phi[pos] / h) * (phi[pos] / h) : std::numeric_limits<float>::max();
         // The fresh neighbours, bit (a * 3 + b) * 3 + c for offset (a-1, b-1, c-1); the
         // voxel itself is never fresh (it is still to fill).
         std::uint32_t around = 0;
@@ -504,25 +504,26 @@ void Wavefront::trim_exterior() {
   // Outside, only the exterior band stays active (the voxels the front accepted below its
   // width); the background becomes that width.
   const float exterior = exterior_voxels_ * h_;
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_, 64),
-                    [&](const tbb::blocked_range<std::size_t>& range) {
-    for (std::size_t i = range.begin(); i < range.end(); ++i) {
-      // Without outside voxels to fill, a leaf holds seeds (|phi| below the seed band) and
-      // inside voxels (negative): nothing to do.
-      if (!any_bit(outside_[i])) continue;
-      FloatLeaf& leaf = *table_.leaves[i];
-      float* phi = table_.values[i];
-      for (int pos = 0; pos < 512; ++pos) {
-        const bool filled = outside_[i][pos >> 6] >> (pos & 63) & 1u;
-        if (!(phi[pos] < exterior) || (filled && !(known_[i][pos >> 6] >> (pos & 63) & 1u))) {
-          phi[pos] = exterior;
-          leaf.setValueOff(pos);
-        } else if (filled) {
-          leaf.setValueOn(pos);
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, n_, 64),
+      [&](const tbb::blocked_range<std::size_t>& range) {
+        for (std::size_t i = range.begin(); i < range.end(); ++i) {
+          // Without outside voxels to fill, a leaf holds seeds (|phi| below the seed band) and
+          // inside voxels (negative): nothing to do.
+          if (!any_bit(outside_[i])) continue;
+          FloatLeaf& leaf = *table_.leaves[i];
+          float* phi = table_.values[i];
+          for (int pos = 0; pos < 512; ++pos) {
+            const bool filled = outside_[i][pos >> 6] >> (pos & 63) & 1u;
+            if (!(phi[pos] < exterior) || (filled && !(known_[i][pos >> 6] >> (pos & 63) & 1u))) {
+              phi[pos] = exterior;
+              leaf.setValueOff(pos);
+            } else if (filled) {
+              leaf.setValueOn(pos);
+            }
+          }
         }
-      }
-    }
-  });
+      });
 }
 
 }  // namespace

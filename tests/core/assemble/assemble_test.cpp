@@ -76,15 +76,13 @@ double volume(const TetMesh& m, const Tet& t) {
 std::map<Key, int> face_counts(const TetMesh& m) {
   std::map<Key, int> count;
   for (const Tet& t : m.tets)
-    for (int k = 0; k < 4; ++k)
-      ++count[sorted_key(t[(k + 1) % 4], t[(k + 2) % 4], t[(k + 3) % 4])];
+    for (int k = 0; k < 4; ++k) ++count[sorted_key(t[(k + 1) % 4], t[(k + 2) % 4], t[(k + 3) % 4])];
   return count;
 }
 
 /// The invariants of a shell without welding: T == 3F, all positive, each input and inner
 /// triangle a face of exactly one tet, every other face of exactly two.
-void expect_conforming_shell(const SurfaceMesh& s, const ShellInput& in,
-                             const AssembleResult& r) {
+void expect_conforming_shell(const SurfaceMesh& s, const ShellInput& in, const AssembleResult& r) {
   const std::size_t n = s.points.size();
   EXPECT_EQ(r.mesh.tets.size(), 3 * s.num_faces());
   for (const Tet& t : r.mesh.tets) EXPECT_GT(volume(r.mesh, t), 0.0);
@@ -148,8 +146,7 @@ TEST(Assemble, SplitPrismEveryIndexOrder) {
     }
     EXPECT_NEAR(sum, prism_volume, 1e-12);
     for (int i = 0; i < 3; ++i)
-      for (int j = i + 1; j < 3; ++j)
-        EXPECT_FALSE(tets_overlap(geometry[i], geometry[j], 1e-12));
+      for (int j = i + 1; j < 3; ++j) EXPECT_FALSE(tets_overlap(geometry[i], geometry[j], 1e-12));
     // Each side quad (k, k+1, k+1', k') is cut along the diagonal through its smallest index.
     for (int k = 0; k < 3; ++k) {
       const std::uint32_t q[4] = {ids[k], ids[(k + 1) % 3], ids[3 + (k + 1) % 3], ids[3 + k]};
@@ -220,8 +217,8 @@ TEST(Assemble, SplitPrismWelded) {
     const PrismTets split = split_prism(ids);
     ASSERT_EQ(split.count, 1);
     EXPECT_EQ(split.dropped, 2);
-    std::map<std::uint32_t, Vec3d> at = {{o, outer[0]}, {o + 1, outer[1]}, {o + 2, outer[2]},
-                                         {apex, Vec3d{0.3, 0.3, -1}}};
+    std::map<std::uint32_t, Vec3d> at = {
+        {o, outer[0]}, {o + 1, outer[1]}, {o + 2, outer[2]}, {apex, Vec3d{0.3, 0.3, -1}}};
     const Tet& t = split.tets[0];
     EXPECT_GT(tet_volume(at[t[0]], at[t[1]], at[t[2]], at[t[3]]), 0.0);
     EXPECT_EQ(std::set<std::uint32_t>(t.begin(), t.end()),
@@ -262,8 +259,8 @@ TEST(Assemble, BoxShellIsConformingWithPerElementData) {
   for (std::size_t t = 0; t < m.tets.size(); ++t) {
     EXPECT_EQ(m.source_triangle[t], t / 3);
     const Tet& tet = m.tets[t];
-    EXPECT_DOUBLE_EQ(m.quality[t], tet_quality(m.points[tet[0]], m.points[tet[1]],
-                                               m.points[tet[2]], m.points[tet[3]]));
+    EXPECT_DOUBLE_EQ(m.quality[t], tet_quality(m.points[tet[0]], m.points[tet[1]], m.points[tet[2]],
+                                               m.points[tet[3]]));
     EXPECT_GT(m.quality[t], 0.0);
   }
   const ShellCheckResult c = check_shell(s, m);
@@ -297,8 +294,7 @@ TEST(Assemble, AllInnerVerticesWeldedGiveOneTetPerPrism) {
       EXPECT_GT(volume(r.mesh, tet), 0.0);
     }
     // Every face through the centre is shared by two tets.
-    for (const auto& [key, c] : face_counts(r.mesh))
-      EXPECT_EQ(c, key[2] == n ? 2 : 1);
+    for (const auto& [key, c] : face_counts(r.mesh)) EXPECT_EQ(c, key[2] == n ? 2 : 1);
     const ShellCheckResult c = check_shell(s, r.mesh);
     EXPECT_TRUE(c.valid()) << describe_problems(c);
     const QualitySummary q = summarize_quality(s, r.mesh);
@@ -325,8 +321,8 @@ TEST(Assemble, VerticesOnTheSurfaceTurnPrismsIntoPyramidsAndTets) {
   std::size_t expected = 0;
   for (std::uint32_t f = 0; f < s.num_faces(); ++f) {
     const Triangle& tri = s.triangles[f];
-    const int on = static_cast<int>(std::count_if(
-        tri.begin(), tri.end(), [](std::uint32_t v) { return v == 0 || v == 2; }));
+    const int on = static_cast<int>(
+        std::count_if(tri.begin(), tri.end(), [](std::uint32_t v) { return v == 0 || v == 2; }));
     EXPECT_EQ(per_face[f], 3 - on) << "face " << f;
     expected += static_cast<std::size_t>(3 - on);
   }
@@ -346,8 +342,7 @@ TEST(Assemble, CapFaceIsOneTetToItsCapPoint) {
   ShellInput in = scaled_input(s, 0.5);
   for (std::uint32_t v : {0u, 2u, 4u}) in.inner_id[v] = kOnSurface;
   std::uint32_t cap = 0;
-  while (sorted_key(s.triangles[cap][0], s.triangles[cap][1], s.triangles[cap][2]) !=
-         Key{0, 2, 4})
+  while (sorted_key(s.triangles[cap][0], s.triangles[cap][1], s.triangles[cap][2]) != Key{0, 2, 4})
     ++cap;
   in.cap_faces = {cap};
   in.cap_points = {Vec3d{1, 1, 1} * (0.9 / 3.0)};

@@ -156,8 +156,8 @@ TEST(Validate, SeveralComponentsAndQuadsAreAllowed) {
   std::string text;
   for (int c = 0; c < 2; ++c)
     for (int i = 0; i < 8; ++i)
-      text += "v " + std::to_string((i & 1) ^ ((i >> 1) & 1)) + " " +
-              std::to_string((i >> 1) & 1) + " " + std::to_string((i >> 2) + 3 * c) + "\n";
+      text += "v " + std::to_string((i & 1) ^ ((i >> 1) & 1)) + " " + std::to_string((i >> 1) & 1) +
+              " " + std::to_string((i >> 2) + 3 * c) + "\n";
   for (int c = 0; c < 2; ++c) {
     const int o = 8 * c;
     const int quads[6][4] = {{1, 4, 3, 2}, {5, 6, 7, 8}, {1, 2, 6, 5},
@@ -194,9 +194,18 @@ TEST(Validate, GenusOfATorusLikeBlock) {
   auto wall = [&](int i0, int j0, int i1, int j1) {
     soup.polygons.push_back({vid(i0, j0, 0), vid(i1, j1, 0), vid(i1, j1, 1), vid(i0, j0, 1)});
   };
-  for (int i = 0; i < 3; ++i) { wall(i, 0, i + 1, 0); wall(i + 1, 3, i, 3); }
-  for (int j = 0; j < 3; ++j) { wall(3, j, 3, j + 1); wall(0, j + 1, 0, j); }
-  wall(1, 1, 1, 2); wall(1, 2, 2, 2); wall(2, 2, 2, 1); wall(2, 1, 1, 1);  // the hole, inward
+  for (int i = 0; i < 3; ++i) {
+    wall(i, 0, i + 1, 0);
+    wall(i + 1, 3, i, 3);
+  }
+  for (int j = 0; j < 3; ++j) {
+    wall(3, j, 3, j + 1);
+    wall(0, j + 1, 0, j);
+  }
+  wall(1, 1, 1, 2);
+  wall(1, 2, 2, 2);
+  wall(2, 2, 2, 1);
+  wall(2, 1, 1, 1);  // the hole, inward
   const LoadedSurface s = make_surface(soup, "block");
   EXPECT_EQ(s.stats.genus, 1);
   EXPECT_NEAR(s.stats.enclosed_volume, 8.0, 1e-12);
@@ -257,8 +266,9 @@ TEST(Readers, AsciiStlOffPlyAgree) {
              "facet normal -1 0 0\nouter loop\n"
              "vertex 0 1 0\nvertex 0 0 0\nvertex 0 0 1\nendloop\nendfacet\n"
              "endsolid t\n");
-  write_text(dir.file("t.off"), "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n"
-                                "3 0 2 1\n3 0 1 3\n3 1 2 3\n3 2 0 3\n");
+  write_text(dir.file("t.off"),
+             "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n"
+             "3 0 2 1\n3 0 1 3\n3 1 2 3\n3 2 0 3\n");
   write_text(dir.file("t.ply"),
              "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
              "property float z\nelement face 4\nproperty list uchar int vertex_indices\n"
@@ -272,11 +282,13 @@ TEST(Readers, AsciiStlOffPlyAgree) {
 
 TEST(Readers, ObjAndOffKeepDoublePrecision) {
   TempDir dir;
-  write_text(dir.file("t.obj"), "v 0.12345678901234567 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
-                                "f 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n");
+  write_text(dir.file("t.obj"),
+             "v 0.12345678901234567 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
+             "f 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n");
   EXPECT_EQ(read_polygon_soup(dir.file("t.obj")).points[0].x, 0.12345678901234567);
-  write_text(dir.file("t.off"), "OFF\n4 4 0\n0.12345678901234567 0 0\n1 0 0\n0 1 0\n0 0 1\n"
-                                "3 0 2 1\n3 0 1 3\n3 1 2 3\n3 2 0 3\n");
+  write_text(dir.file("t.off"),
+             "OFF\n4 4 0\n0.12345678901234567 0 0\n1 0 0\n0 1 0\n0 0 1\n"
+             "3 0 2 1\n3 0 1 3\n3 1 2 3\n3 2 0 3\n");
   EXPECT_EQ(read_polygon_soup(dir.file("t.off")).points[0].x, 0.12345678901234567);
 }
 
@@ -284,13 +296,16 @@ TEST(Readers, ObjAndOffKeepDoublePrecision) {
 TEST(Corpus, SharedMeshesClassifiedAsDocumented) {
   const auto dir = test::shared_meshes_dir();
   if (dir.empty()) GTEST_SKIP() << "../shared/meshes is absent";
-  struct Expect { const char* file; bool valid; std::size_t faces; int genus; };
-  const Expect expected[] = {{"fandisk.obj", true, 12946, 0},
-                             {"decimated-knight.off", true, 1000, 0},
-                             {"fertility.off", true, 9000, 4},
-                             {"spot.obj", true, 5856, 0},
-                             {"suzanne.obj", false, 0, 0},
-                             {"teapot.obj", false, 0, 0}};
+  struct Expect {
+    const char* file;
+    bool valid;
+    std::size_t faces;
+    int genus;
+  };
+  const Expect expected[] = {
+      {"fandisk.obj", true, 12946, 0},  {"decimated-knight.off", true, 1000, 0},
+      {"fertility.off", true, 9000, 4}, {"spot.obj", true, 5856, 0},
+      {"suzanne.obj", false, 0, 0},     {"teapot.obj", false, 0, 0}};
   for (const Expect& e : expected) {
     const std::string path = (dir / e.file).string();
     if (e.valid) {

@@ -69,8 +69,8 @@ TEST(Trace, CubeLikeThePaperEndsAtTheCentre) {
   const TraceResult r = trace_paths(box, *field, TraceOptions{});
   EXPECT_EQ(r.stops(StopReason::kCap), 0u);
   for (std::size_t v = 0; v < r.num_traces(); ++v)
-    EXPECT_LT(norm(r.end_point(v)), 1.5 * voxel) << "vertex " << v << " stop "
-                                                  << to_string(r.stop[v]);
+    EXPECT_LT(norm(r.end_point(v)), 1.5 * voxel)
+        << "vertex " << v << " stop " << to_string(r.stop[v]);
 }
 
 TEST(Trace, BeamFaceTracesStopAtTheMedialSurface) {

@@ -121,10 +121,9 @@ TEST(Validity, ThinPlate) {
 }
 
 TEST(Validity, SharpConcaveNotch) {
-  const std::vector<Vec3d> poly = {{0, 0, 0},      {1, 0, 0},   {1, 1, 0}, {0.55, 1, 0},
-                                   {0.5, 0.3, 0},  {0.45, 1, 0}, {0, 1, 0}};
-  expect_valid(shell_of(extrude(poly, {0.5, 0.15, 0}, 0.4, 4), "notch", 64),
-               "notch");
+  const std::vector<Vec3d> poly = {{0, 0, 0},     {1, 0, 0},    {1, 1, 0}, {0.55, 1, 0},
+                                   {0.5, 0.3, 0}, {0.45, 1, 0}, {0, 1, 0}};
+  expect_valid(shell_of(extrude(poly, {0.5, 0.15, 0}, 0.4, 4), "notch", 64), "notch");
 }
 
 TEST(Validity, LongNeedle) {
@@ -184,8 +183,8 @@ TEST(Validity, CoverageTargetsAt128) {
   }
   std::sort(coverage.begin(), coverage.end());
   const double median = 0.5 * (coverage[1] + coverage[2]);
-  EXPECT_GE(median, 0.85) << "coverage " << coverage[0] << " " << coverage[1] << " "
-                          << coverage[2] << " " << coverage[3];
+  EXPECT_GE(median, 0.85) << "coverage " << coverage[0] << " " << coverage[1] << " " << coverage[2]
+                          << " " << coverage[3];
 }
 
 TEST(Validity, IndependentCheckerAgrees) {

@@ -97,8 +97,8 @@ TEST(ShellChecks, SelfIntersectionsOfTheSurface) {
 }
 
 TEST(ShellChecks, ValidShellsReportNothing) {
-  for (const auto& [name, detail] : {std::pair<const char*, int>{"box", 2}, {"sphere", 2},
-                                     {"cylinder", 1}, {"torus", 1}}) {
+  for (const auto& [name, detail] :
+       {std::pair<const char*, int>{"box", 2}, {"sphere", 2}, {"cylinder", 1}, {"torus", 1}}) {
     SCOPED_TRACE(name);
     const SurfaceMesh s = make_shape(name, detail);
     // The torus is not star-shaped about its centre: shrink its tube instead.
@@ -267,8 +267,7 @@ TEST(ShellChecks, TouchingTetsDoNotOverlap) {
   // Sharing a face, on opposite sides.
   EXPECT_EQ(overlapping_pairs({kA, kB, kC, kD, e}, {{0, 1, 2, 3}, {4, 1, 3, 2}}), 0u);
   // Sharing a face, folded onto the same side.
-  EXPECT_EQ(overlapping_pairs({kA, kB, kC, kD, {0.1, 0.1, 0.1}}, {{0, 1, 2, 3}, {4, 1, 2, 3}}),
-            1u);
+  EXPECT_EQ(overlapping_pairs({kA, kB, kC, kD, {0.1, 0.1, 0.1}}, {{0, 1, 2, 3}, {4, 1, 2, 3}}), 1u);
   // Sharing an edge (B, C), apart.
   EXPECT_EQ(overlapping_pairs({kA, kB, kC, kD, e, {1, 1, -1}}, {{0, 1, 2, 3}, {1, 2, 4, 5}}), 0u);
   // Sharing a vertex (B), apart, and sharing it while poking into the other.
@@ -279,15 +278,16 @@ TEST(ShellChecks, TouchingTetsDoNotOverlap) {
                               {{0, 1, 2, 3}, {1, 4, 5, 6}}),
             1u);
   // Face against face without shared vertices (a smaller tet on face (A, B, C), below it).
-  EXPECT_EQ(overlapping_pairs({kA, kB, kC, kD, {0.1, 0.1, 0}, {0.5, 0.1, 0}, {0.1, 0.5, 0},
-                               {0.2, 0.2, -1}},
-                              {{0, 1, 2, 3}, {4, 6, 5, 7}}),
+  EXPECT_EQ(overlapping_pairs(
+                {kA, kB, kC, kD, {0.1, 0.1, 0}, {0.5, 0.1, 0}, {0.1, 0.5, 0}, {0.2, 0.2, -1}},
+                {{0, 1, 2, 3}, {4, 6, 5, 7}}),
             0u);
   // The same, lifted a little into the first tet.
-  EXPECT_EQ(overlapping_pairs({kA, kB, kC, kD, {0.1, 0.1, 1e-3}, {0.5, 0.1, 1e-3},
-                               {0.1, 0.5, 1e-3}, {0.2, 0.2, -1}},
-                              {{0, 1, 2, 3}, {4, 6, 5, 7}}),
-            1u);
+  EXPECT_EQ(
+      overlapping_pairs(
+          {kA, kB, kC, kD, {0.1, 0.1, 1e-3}, {0.5, 0.1, 1e-3}, {0.1, 0.5, 1e-3}, {0.2, 0.2, -1}},
+          {{0, 1, 2, 3}, {4, 6, 5, 7}}),
+      1u);
   // Far apart: never a candidate.
   EXPECT_EQ(overlapping_pairs({kA, kB, kC, kD, {5, 5, 5}, {6, 5, 5}, {5, 6, 5}, {5, 5, 6}},
                               {{0, 1, 2, 3}, {4, 5, 6, 7}}),
@@ -303,8 +303,8 @@ TEST(ShellChecks, TetAcrossTheTorusHoleLeaks) {
     TetMesh m;
     m.points = s.points;
     const double x = centroid_inside ? 0.45 : 0.35;
-    m.points.insert(m.points.end(), {{x, 0, 0.05}, {x, 0.05, -0.05}, {x, -0.05, -0.05},
-                                     {-0.35, 0, 0}});
+    m.points.insert(m.points.end(),
+                    {{x, 0, 0.05}, {x, 0.05, -0.05}, {x, -0.05, -0.05}, {-0.35, 0, 0}});
     const auto n = static_cast<std::uint32_t>(s.points.size());
     m.tets = {{n, n + 1, n + 2, n + 3}};
     if (tet_volume(m.points[n], m.points[n + 1], m.points[n + 2], m.points[n + 3]) < 0)
@@ -406,9 +406,15 @@ TEST(ShellChecker, AgreesWithCheckShellAlongASequenceOfMoves) {
       for (int k = 0; k < 3; ++k) {
         const std::size_t v = rng() % n;
         switch (rng() % 3) {
-          case 0: in.inner_points[v] = s.points[v] * 1.3; break;         // outside
-          case 1: in.inner_points[v] = home[(v * 7 + 13) % n]; break;    // folds prisms
-          default: in.inner_points[v] = home[v]; break;                  // back home
+          case 0:
+            in.inner_points[v] = s.points[v] * 1.3;
+            break;  // outside
+          case 1:
+            in.inner_points[v] = home[(v * 7 + 13) % n];
+            break;  // folds prisms
+          default:
+            in.inner_points[v] = home[v];
+            break;  // back home
         }
       }
     }

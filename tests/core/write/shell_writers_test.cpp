@@ -92,9 +92,9 @@ bool meshio_available() {
   return available;
 }
 
-#define SKIP_WITHOUT_MESHIO()                                                          \
-  do {                                                                                 \
-    if (!meshio_available()) GTEST_SKIP() << kPython << " cannot import meshio";       \
+#define SKIP_WITHOUT_MESHIO()                                                    \
+  do {                                                                           \
+    if (!meshio_available()) GTEST_SKIP() << kPython << " cannot import meshio"; \
   } while (0)
 
 // Prints what meshio read, exactly (repr of a float reads back bit for bit).
@@ -239,12 +239,18 @@ const std::vector<FormatCase>& all_formats() {
 
 std::string format_name(TetFormat format) {
   switch (format) {
-    case TetFormat::Vtu: return "vtu";
-    case TetFormat::Vtk: return "vtk";
-    case TetFormat::Msh41: return "msh41";
-    case TetFormat::Msh22: return "msh22";
-    case TetFormat::Medit: return "medit";
-    case TetFormat::TetGen: return "tetgen";
+    case TetFormat::Vtu:
+      return "vtu";
+    case TetFormat::Vtk:
+      return "vtk";
+    case TetFormat::Msh41:
+      return "msh41";
+    case TetFormat::Msh22:
+      return "msh22";
+    case TetFormat::Medit:
+      return "medit";
+    case TetFormat::TetGen:
+      return "tetgen";
   }
   return "?";
 }
@@ -378,10 +384,11 @@ TEST(WritersTest, GmshReadsMshAndMeditWithPositiveJacobians) {
     write_tet_mesh(dir.file(c.file), cube, c.format);
     // Gmsh's mesh-quality plugin reports the minimum Jacobian determinant: negative if inverted.
     test::write_text(dir.file("check.geo"),
-                     "Merge \"" + dir.file(c.file) + "\";\n"
-                     "Plugin(AnalyseMeshQuality).JacobianDeterminant = 1;\n"
-                     "Plugin(AnalyseMeshQuality).CreateView = 0;\n"
-                     "Plugin(AnalyseMeshQuality).Run;\n");
+                     "Merge \"" + dir.file(c.file) +
+                         "\";\n"
+                         "Plugin(AnalyseMeshQuality).JacobianDeterminant = 1;\n"
+                         "Plugin(AnalyseMeshQuality).CreateView = 0;\n"
+                         "Plugin(AnalyseMeshQuality).Run;\n");
     const test::CommandResult r =
         test::run_command("gmsh -nopopup -0 '" + dir.file("check.geo") + "'");
     const std::string log = r.out + r.err;
@@ -521,9 +528,9 @@ TEST(WritersTest, CheckShellAcceptsTheCubeInEveryFormat) {
     SCOPED_TRACE(format_name(c.format));
     const std::string path = dir.file(format_name(c.format) + "_" + c.file);
     write_tet_mesh(path, cube, c.format);
-    const test::CommandResult r = test::run_command(
-        std::string(kPython) + " '" + checker.string() + "' '" + dir.file("cube.obj") + "' '" +
-        path + "' --samples 4000 --orientation positive");
+    const test::CommandResult r = test::run_command(std::string(kPython) + " '" + checker.string() +
+                                                    "' '" + dir.file("cube.obj") + "' '" + path +
+                                                    "' --samples 4000 --orientation positive");
     EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
     EXPECT_NE(r.out.find("VERDICT: VALID"), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("missing surface faces 0"), std::string::npos) << r.out;
@@ -537,8 +544,8 @@ TEST(WritersTest, BoundaryFacesOfASingleTetPointOutward) {
   for (std::size_t f = 0; f < 4; ++f) {
     // The vertex the face is opposite to lies behind it.
     const std::uint32_t opposite = tet.tets[0][f];
-    EXPECT_LT(tet_volume(tet.points[faces[f][0]], tet.points[faces[f][1]],
-                         tet.points[faces[f][2]], tet.points[opposite]),
+    EXPECT_LT(tet_volume(tet.points[faces[f][0]], tet.points[faces[f][1]], tet.points[faces[f][2]],
+                         tet.points[opposite]),
               0.0);
   }
 }
@@ -691,7 +698,7 @@ TEST(AtomicFileTest, PendingTempFilesAreRemovedOnRequest) {
   for (std::size_t i = 1; i < files.size(); ++i) left += fs::exists(files[i]->temp_path());
   EXPECT_EQ(left, 4u);  // the 4 files beyond the registry's capacity
   EXPECT_TRUE(fs::exists(dir.file("f0")));
-  files.clear();        // destructors remove whatever is left
+  files.clear();  // destructors remove whatever is left
   EXPECT_EQ(folder_entries(dir.path()), std::vector<std::string>{"f0"});
 }
 
