@@ -63,18 +63,18 @@ enum class SdfMethod {
   /// compare_seed_band()), then a closest-triangle wavefront into the interior and out to the
   /// exterior band: every voxel takes the closest of the triangles its 26 neighbours took, voxels
   /// accepted in order of distance (one voxel per iteration); then voxels near medial surfaces
-  /// try the triangles of their 5^3 neighbourhood. Sphere of radius 64 voxels: max error 0.06
-  /// voxels (the polygonal sphere's own). Measured (tests/bench, all fields): see
-  /// docs/benchmarks.md, "Fields: the seed band's voxelization by bit rows".
+  /// try the triangles of their 5^3 neighbourhood. Exact up to float rounding: the distance to
+  /// the closest triangle (tests compare it with kMeshToVolumeInterior; timings and memory in
+  /// docs/benchmarks.md).
   kExactInterior,
   /// OpenVDB meshToVolume with an unbounded interior band (its own layer-by-layer closest-polygon
   /// expansion), then one pass in which every voxel also tries the triangles its 26 neighbours
-  /// found closest. Sphere: max error 0.06 voxels. Kept for comparison: about 2x slower than
-  /// kExactInterior at 512^3.
+  /// found closest. The same distances as kExactInterior up to a fraction of a voxel, and
+  /// slower at high resolutions (docs/benchmarks.md); kept as the reference.
   kMeshToVolumeInterior,
   /// Narrow band (3 voxels each side) followed by first-order fast sweeping into the interior
-  /// (tools::dilateSdf). Kept for comparison only: 1.7 voxels off at the centre of a sphere of
-  /// radius 64 voxels, 2-4x slower and ~6x the memory at 512^3.
+  /// (tools::dilateSdf). First order: off by a voxel or more deep inside, and slower and larger
+  /// than kExactInterior (docs/benchmarks.md); kept for comparison.
   kFastSweeping,
 };
 
@@ -91,9 +91,9 @@ struct FieldOptions {
   /// read as 0. Keep it at most half the tracer's medial threshold rho (default rho 0.1).
   double flux_min = 0.05;
   /// Store the gradient as a Vec3SGrid (written to .vdb as `gradient`) instead of computing it
-  /// from the SDF's 32-voxel stencil at each query. Measured at 512^3 (fandisk, one thread): a
-  /// trace step (gradient + flux) takes 183 ns stored vs 219 ns on the fly, but the grids need
-  /// 388 MB instead of 120 MB and the build 1-2 s more; hence off by default.
+  /// from the SDF's 32-voxel stencil at each query. Trace steps get a little faster, but the
+  /// grids take about three times the memory and the build longer (docs/benchmarks.md); hence
+  /// off by default.
   bool store_gradient = false;
   /// Interior fill method (see SdfMethod).
   SdfMethod sdf_method = SdfMethod::kExactInterior;

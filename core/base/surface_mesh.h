@@ -27,7 +27,7 @@ struct SurfaceMesh {
 
 /// Geometry helpers on a SurfaceMesh.
 BBox bounding_box(const SurfaceMesh& mesh);
-/// Unit-length-weighted normal (b-a)x(c-a) of triangle f; its length is twice the area.
+/// Area-weighted normal (b-a)x(c-a) of triangle f; its length is twice the area.
 Vec3d face_normal_area(const SurfaceMesh& mesh, std::size_t f);
 /// Signed enclosed volume (divergence theorem); positive for outward-oriented closed meshes.
 double signed_volume(const SurfaceMesh& mesh);

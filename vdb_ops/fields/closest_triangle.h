@@ -108,8 +108,8 @@ inline float point_triangle_distance2f(const float (&p)[3], const TriangleF& t) 
 /// but cheaper: the triangles p projects into are measured first (their distance is the
 /// plane's), and the others only where a lower bound of their distance (to the plane, and within
 /// it to the triangle's nearest edge line) does not already exceed the best by more than
-/// rounding. Fandisk 512^3: 18.5M of the wavefront's 35.2M measurements project outside the
-/// triangle; the bound rules out 7.7M of them even without measuring the others first.
+/// rounding. About half of the wavefront's measurements project outside the triangle, and the
+/// bound rules out many of those.
 inline void lower_to_closest(const float (&p)[3], const std::int32_t* cand, int nc,
                              const std::vector<TriangleF>& tris, float& best,
                              std::int32_t& best_id) {

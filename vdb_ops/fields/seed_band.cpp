@@ -43,8 +43,7 @@ FloatGrid::Ptr mesh_to_volume(const IndexMesh& m, const openvdb::math::Transform
 // triangle flood-fills from the voxel floor(a) through the voxels it intersects (squared distance
 // to the voxel centre <= 0.75), measuring every voxel it reaches with
 // closestPointOnTriangleToPoint; each voxel keeps the smallest squared distance and, among equal
-// ones, the smallest triangle index. Tree accesses per voxel make this ~60% of the band's time
-// (fandisk 512^3: 0.25 of 0.41 s).
+// ones, the smallest triangle index. Tree accesses per voxel make this most of the band's time.
 // The voxels a triangle reaches are the 3^3 neighbourhoods of floor(a) and of the voxels it
 // intersects, since those are 26-connected (the voxel centre nearest to any point of the triangle
 // is within sqrt(0.75) of it, and moves to a neighbour as the point moves). band_voxels() finds

@@ -347,7 +347,7 @@ void Wavefront::gather_fresh_triangles(std::size_t li, const std::uint16_t (&hal
   // Triangles of the voxels accepted last iteration, over the leaf and its halo; only read
   // where `halo` has a bit. With at most 64 distinct ones, each also becomes a bit (`words`):
   // a voxel's candidates are then the union of its fresh neighbours' bits, distinct by
-  // construction (fandisk 512^3: 5-8 distinct in most leaves).
+  // construction (a handful of distinct triangles in most leaves).
   const std::array<std::int32_t, 27>& nb = table_.neighbours[li];
   map.clear();
   scratch.n_distinct = 0;
