@@ -5,7 +5,7 @@
 set -euo pipefail
 
 packages=(
-  build-essential cmake ninja-build ccache pkg-config
+  build-essential cmake ninja-build ccache pkg-config clang-format
   libopenvdb-dev libboost-dev libtbb-dev libopenmesh-dev
   libgtest-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev
   libopenvdb-tools gmsh tetgen

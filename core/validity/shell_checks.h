@@ -1,5 +1,5 @@
-// shell_checks.h — verifying the invariants of a tet shell against its input surface
-// (DESIGN.md, "Invariants of the output").
+// shell_checks.h — verifying the invariants of a tet shell against its input surface (the
+// conditions of docs/validity.md, "The unknowns and the conditions").
 //
 // check_shell() counts, for a TetMesh built on a SurfaceMesh:
 //   * inverted tets: signed volume V < 0 (and not zero-volume, below);
@@ -129,12 +129,12 @@ bool tets_overlap(const std::array<Vec3d, 4>& a, const std::array<Vec3d, 4>& b,
 /// Every mesh must be an assemble_shell() result (assemble.h): tets grouped by
 /// TetMesh::source_triangle in triangle order, at most 3 per triangle. Volumes and surface
 /// points are checked in full on every call, boundary faces whenever the tets' vertex indices
-/// changed (they depend on nothing else), inner points once per distinct position. The overlap and leak tests only test the tets of "dirty" prisms — whose
-/// tets moved since the previous call, or that offended in it — against all others, and trust
-/// every other pair: both its tets are where they were when the pair last passed. The listed
-/// offenders therefore always involve a dirty prism, and valid() is check_shell()'s verdict.
-/// A grid over the surface's box is built once, at the first call, and the tets of a prism are
-/// moved in it when the prism moves.
+/// changed (they depend on nothing else), inner points once per distinct position. The overlap
+/// and leak tests only test the tets of "dirty" prisms — whose tets moved since the previous
+/// call, or that offended in it — against all others, and trust every other pair: both its tets
+/// are where they were when the pair last passed. The listed offenders therefore always involve
+/// a dirty prism, and valid() is check_shell()'s verdict. A grid over the surface's box is built
+/// once, at the first call, and the tets of a prism are moved in it when the prism moves.
 class ShellChecker {
  public:
   explicit ShellChecker(const SurfaceMesh& surface, const ShellCheckOptions& options = {});
@@ -150,11 +150,12 @@ class ShellChecker {
   std::unique_ptr<Impl> impl_;
 };
 
-/// Pairs of surface triangles (i < j, ascending) whose interiors cross: the surface intersects
+/// Pairs of surface triangles (i, j), i < j, whose interiors cross: the surface intersects
 /// itself and bounds no single volume. Triangles that only touch (a shared vertex or edge
-/// included) do not count. At most `max_listed` pairs.
+/// included) do not count. At most `max_listed` pairs, by ascending i; the pairs of one i in the
+/// order a grid of cells meets them (not necessarily ascending j).
 std::vector<std::array<std::uint32_t, 2>> surface_self_intersections(const SurfaceMesh& surface,
-                                                                      std::size_t max_listed);
+                                                                     std::size_t max_listed);
 
 /// One line per failed check ("3 inverted tets (first: 12, 40, 41)"); "" when valid.
 std::string describe_problems(const ShellCheckResult& result);
@@ -165,7 +166,6 @@ bool point_outside_surface(const SurfaceMesh& surface, const Vec3d& p, double to
 
 /// Whether the interiors of tets (a0..a3) and (b0..b3) intersect: separating-axis test, where
 /// projections overlapping by at most `tolerance` world units count as touching.
-bool tets_overlap(const std::array<Vec3d, 4>& a, const std::array<Vec3d, 4>& b,
-                  double tolerance);
+bool tets_overlap(const std::array<Vec3d, 4>& a, const std::array<Vec3d, 4>& b, double tolerance);
 
 }  // namespace vdb_shell

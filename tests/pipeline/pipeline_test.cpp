@@ -96,7 +96,7 @@ TEST(Pipeline, ReportHasEveryDocumentedKey) {
 }
 
 TEST(Pipeline, CoarsePaperShapesAreValidAndFull) {
-  // The paper's claim holds where the mesh is coarser than the grid (DESIGN: measured 0.98+).
+  // The paper's claim holds where the mesh is coarser than the grid (0.98+ measured).
   for (const char* name : {"box", "cylinder", "sphere"}) {
     const ShellResult r = shell_of_shape(name, ShellOptions());
     const double coverage = test::independent_coverage(r.surface, r.mesh);

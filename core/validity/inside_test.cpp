@@ -1,0 +1,206 @@
+// inside_test.cpp — see inside_test.h; also point_outside_surface() of shell_checks.h.
+#include "core/validity/inside_test.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/validity/shell_checks.h"
+
+namespace vdb_shell {
+namespace {
+
+// Squared distance from p to triangle (a, b, c) (Ericson, Real-Time Collision Detection 5.1.5).
+double point_triangle_distance2(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  const Vec3d ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = dot(ab, ap), d2 = dot(ac, ap);
+  if (d1 <= 0.0 && d2 <= 0.0) return norm2(ap);
+  const Vec3d bp = p - b;
+  const double d3 = dot(ab, bp), d4 = dot(ac, bp);
+  if (d3 >= 0.0 && d4 <= d3) return norm2(bp);
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return norm2(ap - ab * (d1 / (d1 - d3)));
+  const Vec3d cp = p - c;
+  const double d5 = dot(ab, cp), d6 = dot(ac, cp);
+  if (d6 >= 0.0 && d5 <= d6) return norm2(cp);
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return norm2(ap - ac * (d2 / (d2 - d6)));
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0)
+    return norm2(bp - (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6))));
+  const double denom = va + vb + vc;
+  if (!(denom != 0.0)) return std::min({norm2(ap), norm2(bp), norm2(cp)});
+  const double v = vb / denom, w = vc / denom;
+  return norm2(ap - ab * v - ac * w);
+}
+
+// Solid angle of triangle (a, b, c) seen from p, signed (Van Oosterom and Strackee 1983).
+double solid_angle(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  const Vec3d x = a - p, y = b - p, z = c - p;
+  const double lx = norm(x), ly = norm(y), lz = norm(z);
+  const double num = dot(x, cross(y, z));
+  const double den = lx * ly * lz + dot(x, y) * lz + dot(y, z) * lx + dot(z, x) * ly;
+  return 2.0 * std::atan2(num, den);
+}
+
+// A ray from `p` towards +axis; (u, v) are the two other coordinates; eps in world units.
+struct Ray {
+  int axis, u, v;
+  Vec3d p;
+  double eps;
+};
+
+enum class RayHit { kMiss, kCross, kGraze };
+
+// How `ray` meets triangle (a, b, c), whose box is [lo, hi]: it crosses the triangle's interior,
+// misses it, or grazes it (passes within eps of an edge, or meets it seen edge-on).
+RayHit ray_meets(const Ray& ray, const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& lo,
+                 const Vec3d& hi) {
+  const int u = ray.u, v = ray.v;
+  const double eps = ray.eps, pu = ray.p[u], pv = ray.p[v];
+  // Signed distances (2D) of the projected point from the projected edges, positive inside.
+  const double au = a[u], av = a[v], bu = b[u], bv = b[v], cu = c[u], cv = c[v];
+  const double d = (bu - au) * (cv - av) - (bv - av) * (cu - au);
+  const double l_bc = std::hypot(cu - bu, cv - bv), l_ca = std::hypot(au - cu, av - cv),
+               l_ab = std::hypot(bu - au, bv - av);
+  const double l_max = std::max({l_bc, l_ca, l_ab});
+  if (std::abs(d) <= eps * l_max) {  // seen edge-on: the ray may graze it
+    const bool near =
+        pu >= lo[u] - eps && pu <= hi[u] + eps && pv >= lo[v] - eps && pv <= hi[v] + eps;
+    return near ? RayHit::kGraze : RayHit::kMiss;
+  }
+  const double s = d > 0.0 ? 1.0 : -1.0;
+  const double w0 = (cu - bu) * (pv - bv) - (cv - bv) * (pu - bu);
+  const double w1 = (au - cu) * (pv - cv) - (av - cv) * (pu - cu);
+  const double w2 = (bu - au) * (pv - av) - (bv - av) * (pu - au);
+  const double e0 = s * w0 / l_bc, e1 = s * w1 / l_ca, e2 = s * w2 / l_ab;
+  const double e_min = std::min({e0, e1, e2});
+  if (e_min < -eps) return RayHit::kMiss;
+  const double z = (w0 * a[ray.axis] + w1 * b[ray.axis] + w2 * c[ray.axis]) / d;
+  if (z <= ray.p[ray.axis]) return RayHit::kMiss;
+  return e_min <= eps ? RayHit::kGraze : RayHit::kCross;
+}
+
+}  // namespace
+
+long InsideTester::ColumnGrid::cell_u(double x) const {
+  return std::clamp(static_cast<long>(std::floor((x - lo_u) * inv_cell)), 0L, nu - 1);
+}
+
+long InsideTester::ColumnGrid::cell_v(double x) const {
+  return std::clamp(static_cast<long>(std::floor((x - lo_v) * inv_cell)), 0L, nv - 1);
+}
+
+InsideTester::InsideTester(const SurfaceMesh& surface, double tolerance)
+    : surface_(surface), tolerance_(tolerance) {
+  for (int axis = 0; axis < 3; ++axis) build(axis);
+}
+
+bool InsideTester::outside(const Vec3d& p) const {
+  for (int axis = 0; axis < 3; ++axis) {
+    switch (cast_ray(axis, p)) {
+      case RayVerdict::kInside:
+      case RayVerdict::kOnSurface:
+        return false;
+      case RayVerdict::kOutside:
+        return true;
+      case RayVerdict::kAmbiguous:
+        break;
+    }
+  }
+  double winding = 0.0;
+  for (const Triangle& t : surface_.triangles)
+    winding += solid_angle(p, surface_.points[t[0]], surface_.points[t[1]], surface_.points[t[2]]);
+  return std::abs(winding) < 2.0 * kPi;  // |winding number| < 1/2
+}
+
+void InsideTester::build(int axis) {
+  ColumnGrid& g = grids_[axis];
+  g.u = (axis + 1) % 3;
+  g.v = (axis + 2) % 3;
+  const BBox box = bounding_box(surface_);
+  const std::size_t n_faces = surface_.triangles.size();
+  if (box.empty() || n_faces == 0) {
+    g.start.assign(2, 0);
+    return;
+  }
+  const double eps = tolerance_;
+  g.lo_u = box.lo[g.u] - eps;
+  g.lo_v = box.lo[g.v] - eps;
+  const double ext_u = box.hi[g.u] - box.lo[g.u] + 2 * eps;
+  const double ext_v = box.hi[g.v] - box.lo[g.v] + 2 * eps;
+  // About one triangle per cell, at most 2048 cells a side.
+  double cell = std::sqrt(ext_u * ext_v / static_cast<double>(n_faces));
+  cell = std::max({cell, ext_u / 2048.0, ext_v / 2048.0});
+  if (!(cell > 0.0)) cell = std::max({ext_u, ext_v, 1.0});
+  g.inv_cell = 1.0 / cell;
+  g.nu = std::clamp(static_cast<long>(std::ceil(ext_u / cell)), 1L, 2048L);
+  g.nv = std::clamp(static_cast<long>(std::ceil(ext_v / cell)), 1L, 2048L);
+
+  // Counting sort of the triangles into the cells their projected boxes (grown by eps) cover.
+  std::vector<std::array<long, 4>> range(n_faces);  // cell ranges per triangle
+  g.start.assign(static_cast<std::size_t>(g.nu * g.nv) + 1, 0);
+  for (std::size_t f = 0; f < n_faces; ++f) {
+    const Triangle& t = surface_.triangles[f];
+    double lu = INFINITY, hu = -INFINITY, lv = INFINITY, hv = -INFINITY;
+    for (const std::uint32_t i : t) {
+      lu = std::min(lu, surface_.points[i][g.u]);
+      hu = std::max(hu, surface_.points[i][g.u]);
+      lv = std::min(lv, surface_.points[i][g.v]);
+      hv = std::max(hv, surface_.points[i][g.v]);
+    }
+    range[f] = {g.cell_u(lu - eps), g.cell_u(hu + eps), g.cell_v(lv - eps), g.cell_v(hv + eps)};
+    for (long iu = range[f][0]; iu <= range[f][1]; ++iu)
+      for (long iv = range[f][2]; iv <= range[f][3]; ++iv)
+        ++g.start[static_cast<std::size_t>(iu * g.nv + iv) + 1];
+  }
+  for (std::size_t c = 1; c < g.start.size(); ++c) g.start[c] += g.start[c - 1];
+  g.items.resize(g.start.back());
+  std::vector<std::uint32_t> fill(g.start.begin(), g.start.end() - 1);
+  for (std::size_t f = 0; f < n_faces; ++f)
+    for (long iu = range[f][0]; iu <= range[f][1]; ++iu)
+      for (long iv = range[f][2]; iv <= range[f][3]; ++iv)
+        g.items[fill[static_cast<std::size_t>(iu * g.nv + iv)]++] = static_cast<std::uint32_t>(f);
+}
+
+InsideTester::RayVerdict InsideTester::cast_ray(int axis, const Vec3d& p) const {
+  const ColumnGrid& g = grids_[axis];
+  const Ray ray{axis, g.u, g.v, p, tolerance_};
+  const double eps = tolerance_;
+  const double pu = p[g.u], pv = p[g.v];
+  if (pu < g.lo_u || pv < g.lo_v || pu > g.lo_u + static_cast<double>(g.nu) / g.inv_cell ||
+      pv > g.lo_v + static_cast<double>(g.nv) / g.inv_cell)
+    return RayVerdict::kOutside;
+  const std::size_t cell = static_cast<std::size_t>(g.cell_u(pu) * g.nv + g.cell_v(pv));
+  int crossings = 0;
+  bool ambiguous = false;
+  for (std::uint32_t k = g.start[cell]; k < g.start[cell + 1]; ++k) {
+    const Triangle& t = surface_.triangles[g.items[k]];
+    const Vec3d& a = surface_.points[t[0]];
+    const Vec3d& b = surface_.points[t[1]];
+    const Vec3d& c = surface_.points[t[2]];
+    const Vec3d lo = min_of(a, min_of(b, c)), hi = max_of(a, max_of(b, c));
+    if (hi[axis] + eps < p[axis]) continue;  // entirely behind the ray's origin
+    if (p.x >= lo.x - eps && p.x <= hi.x + eps && p.y >= lo.y - eps && p.y <= hi.y + eps &&
+        p.z >= lo.z - eps && p.z <= hi.z + eps && point_triangle_distance2(p, a, b, c) <= eps * eps)
+      return RayVerdict::kOnSurface;
+    if (ambiguous) continue;  // only an on-surface hit can still decide
+    switch (ray_meets(ray, a, b, c, lo, hi)) {
+      case RayHit::kCross:
+        ++crossings;
+        break;
+      case RayHit::kGraze:
+        ambiguous = true;
+        break;
+      case RayHit::kMiss:
+        break;
+    }
+  }
+  if (ambiguous) return RayVerdict::kAmbiguous;
+  return crossings % 2 == 1 ? RayVerdict::kInside : RayVerdict::kOutside;
+}
+
+bool point_outside_surface(const SurfaceMesh& surface, const Vec3d& p, double tolerance) {
+  return InsideTester(surface, tolerance).outside(p);
+}
+
+}  // namespace vdb_shell

@@ -1,0 +1,57 @@
+// inside_test.h — whether points lie outside a closed surface, for many points against one
+// index.
+//
+// Method: the parity of the crossings of an axis-parallel ray, its triangles found in a 2D grid
+// of the triangles' projections (one grid per axis). A ray that passes within the tolerance of a
+// triangle's edge, or meets a triangle seen edge-on, is ambiguous and the next axis is tried;
+// after three ambiguous axes the generalized winding number over all triangles decides. Points
+// within the tolerance of a triangle (exact point-triangle distance) are on the surface, hence
+// not outside.
+//
+// Internal to core/validity (not installed); point_outside_surface() (shell_checks.h) is the
+// public one-point call.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "core/base/surface_mesh.h"
+#include "core/base/vec3.h"
+
+namespace vdb_shell {
+
+class InsideTester {
+ public:
+  /// Indexes `surface`, which must be closed and outward oriented, and outlive the tester.
+  /// \param tolerance  world units: points closer than this to the surface are on it.
+  InsideTester(const SurfaceMesh& surface, double tolerance);
+
+  /// Whether `p` (world units) lies outside the surface, farther than the tolerance from it.
+  /// Thread-safe.
+  bool outside(const Vec3d& p) const;
+
+ private:
+  enum class RayVerdict { kInside, kOutside, kOnSurface, kAmbiguous };
+
+  // Triangles listed per cell of the projection along an axis onto coordinates (u, v).
+  struct ColumnGrid {
+    int u = 1, v = 2;
+    double lo_u = 0.0, lo_v = 0.0, inv_cell = 1.0;  // world units, 1 / world units
+    long nu = 1, nv = 1;
+    std::vector<std::uint32_t> start;  // nu * nv + 1
+    std::vector<std::uint32_t> items;
+    long cell_u(double x) const;
+    long cell_v(double x) const;
+  };
+
+  void build(int axis);
+  // Parity of the crossings of the ray from p towards +axis.
+  RayVerdict cast_ray(int axis, const Vec3d& p) const;
+
+  const SurfaceMesh& surface_;
+  double tolerance_;
+  std::array<ColumnGrid, 3> grids_;
+};
+
+}  // namespace vdb_shell

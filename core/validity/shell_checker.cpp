@@ -1,0 +1,262 @@
+// shell_checker.cpp — ShellChecker (shell_checks.h): check_shell()'s checks, repeated on shells
+// that change a few prisms at a time.
+//
+// One BroadPhase (tet_grid.h) over the surface's box, grown to hold the first shell, is built at
+// the first call, with the surface triangles entered once and tet k of prism f entered under the
+// key 3 * f + k. A call moves the tets of the prisms that changed and runs the narrow phase
+// (tet_intersections.h) for the "dirty" prisms — changed since the previous call, or offending
+// in it — only; every other pair is trusted: both its tets are where they were when the pair was
+// last tested, and it passed. The element checks are check_shell()'s (check_steps.h), with
+// two caches: the boundary faces, which depend on the tets' vertex indices only, and whether each
+// distinct inner point position is outside.
+#include <algorithm>
+#include <array>
+#include <map>
+#include <memory>
+#include <string>
+#include <utility>
+
+#include "core/base/errors.h"
+#include "core/base/parallel.h"
+#include "core/base/timer.h"
+#include "core/validity/check_steps.h"
+#include "core/validity/inside_test.h"
+#include "core/validity/shell_checks.h"
+#include "core/validity/tet_grid.h"
+#include "core/validity/tet_intersections.h"
+#include "core/validity/tet_predicates.h"
+
+namespace vdb_shell {
+namespace {
+
+// Per prism f (its source triangle): its first tet in the mesh, first[f]; first[F] = T.
+// \throw InputError unless the tets are grouped by source triangle in order, at most 3 each.
+std::vector<std::uint32_t> prism_starts(const TetMesh& mesh, std::size_t n_faces) {
+  const std::size_t n = mesh.tets.size();
+  if (mesh.source_triangle.size() != n)
+    throw InputError(
+        "ShellChecker: the tet mesh has no source triangle per tet; pass an "
+        "assemble_shell() result");
+  std::vector<std::uint32_t> first(n_faces + 1, 0);
+  for (std::size_t t = 0; t < n; ++t) {
+    const std::uint32_t f = mesh.source_triangle[t];
+    if (f >= n_faces || (t > 0 && f < mesh.source_triangle[t - 1]))
+      throw InputError("ShellChecker: tet " + std::to_string(t) + " has source triangle " +
+                       std::to_string(f) +
+                       " out of order or range; pass an assemble_shell() result");
+    ++first[f + 1];
+  }
+  for (std::size_t f = 0; f < n_faces; ++f) {
+    if (first[f + 1] > 3)
+      throw InputError("ShellChecker: triangle " + std::to_string(f) +
+                       " has more than 3 tets; pass an assemble_shell() result");
+    first[f + 1] += first[f];
+  }
+  return first;
+}
+
+void copy_face_counts(const ShellCheckResult& from, ShellCheckResult& to) {
+  to.missing_triangles = from.missing_triangles;
+  to.first_missing_triangles = from.first_missing_triangles;
+  to.shared_triangles = from.shared_triangles;
+  to.first_shared_triangles = from.first_shared_triangles;
+  to.misoriented_triangles = from.misoriented_triangles;
+  to.first_misoriented_triangles = from.first_misoriented_triangles;
+  to.nonmanifold_faces = from.nonmanifold_faces;
+}
+
+}  // namespace
+
+struct ShellChecker::Impl {
+  Impl(const SurfaceMesh& s, const ShellCheckOptions& o)
+      : surface(s),
+        options(o),
+        inside(s, on_surface_distance(s, o)),
+        tet_count(s.triangles.size(), 0),
+        offended(s.triangles.size(), 0) {}
+
+  // The new tets of a prism that moved.
+  struct MovedPrism {
+    std::uint32_t face = 0;
+    std::uint32_t count = 0;
+    std::array<TetGeometry, 3> geo;
+  };
+
+  const SurfaceMesh& surface;
+  ShellCheckOptions options;
+  InsideTester inside;
+  std::unique_ptr<BroadPhase> phase;    // from the first call on
+  std::vector<std::uint8_t> tet_count;  // per prism: its tets in `phase`
+  std::vector<std::uint8_t> offended;   // per prism, in the previous call
+  std::map<std::array<double, 3>, bool> outside_cache;
+  std::vector<Tet> faces_tets;  // the tets of the last boundary face check, and its result
+  ShellCheckResult faces_result;
+
+  void check_faces(const TetMesh& mesh, ShellCheckResult& result);
+  void check_inner_points(const TetMesh& mesh, const std::vector<std::uint32_t>& inner_points,
+                          ShellCheckResult& result);
+  std::vector<std::uint8_t> changed_prisms(const TetMesh& mesh,
+                                           const std::vector<std::uint32_t>& first) const;
+  void build_phase(const std::vector<MovedPrism>& all);
+  void move_prisms(const TetMesh& mesh, const std::vector<std::uint32_t>& first,
+                   const std::vector<std::uint32_t>& moved);
+  void check_intersections(const TetMesh& mesh, const std::vector<std::uint32_t>& first,
+                           const std::vector<std::uint32_t>& dirty, ShellCheckResult& result);
+};
+
+// Boundary faces, checked again only when the tets' vertex indices changed.
+void ShellChecker::Impl::check_faces(const TetMesh& mesh, ShellCheckResult& result) {
+  if (mesh.tets != faces_tets) {
+    faces_result = ShellCheckResult{};
+    check_boundary_faces(surface, mesh, options, faces_result);
+    faces_tets = mesh.tets;
+  }
+  copy_face_counts(faces_result, result);
+}
+
+// Inner points inside, each position tested once over all calls.
+void ShellChecker::Impl::check_inner_points(const TetMesh& mesh,
+                                            const std::vector<std::uint32_t>& inner_points,
+                                            ShellCheckResult& result) {
+  std::vector<std::uint8_t> outside(inner_points.size(), 0);
+  std::vector<std::size_t> unknown;
+  for (std::size_t i = 0; i < inner_points.size(); ++i) {
+    const Vec3d& p = mesh.points[inner_points[i]];
+    const auto it = outside_cache.find({p.x, p.y, p.z});
+    if (it == outside_cache.end())
+      unknown.push_back(i);
+    else
+      outside[i] = it->second ? 1 : 0;
+  }
+  for_each_index(unknown.size(), [&](std::size_t j) {
+    outside[unknown[j]] = inside.outside(mesh.points[inner_points[unknown[j]]]) ? 1 : 0;
+  });
+  for (const std::size_t i : unknown) {
+    const Vec3d& p = mesh.points[inner_points[i]];
+    outside_cache.emplace(std::array<double, 3>{p.x, p.y, p.z}, outside[i] != 0);
+  }
+  record_outside_points(inner_points, outside, options, result);
+}
+
+// Per prism: 1 when its tets' corners differ from those in the phase (every prism at the first
+// call).
+std::vector<std::uint8_t> ShellChecker::Impl::changed_prisms(
+    const TetMesh& mesh, const std::vector<std::uint32_t>& first) const {
+  const std::size_t n_faces = first.size() - 1;
+  std::vector<std::uint8_t> changed(n_faces, 1);
+  if (!phase) return changed;
+  for_each_index(n_faces, [&](std::size_t f) {
+    bool same = tet_count[f] == first[f + 1] - first[f];
+    for (std::uint32_t t = first[f]; same && t < first[f + 1]; ++t)
+      same = tet_corners(mesh, t) == phase->geometry(3 * f + (t - first[f])).p;
+    changed[f] = same ? 0 : 1;
+  });
+  return changed;
+}
+
+// The phase, over the surface's box and the first shell's tets `all` (every prism), with a 5%
+// margin, and those tets in it.
+void ShellChecker::Impl::build_phase(const std::vector<MovedPrism>& all) {
+  std::vector<TetGeometry> geo;
+  for (const MovedPrism& p : all) geo.insert(geo.end(), p.geo.begin(), p.geo.begin() + p.count);
+  BBox box = bounding_box(surface);
+  const BBox tets = bounding_box_of(geo);
+  box.expand(tets.lo);
+  box.expand(tets.hi);
+  const double margin = 0.05 * box.diagonal();
+  box.expand(box.lo - Vec3d{margin, margin, margin});
+  box.expand(box.hi + Vec3d{margin, margin, margin});
+  std::vector<TetGeometry> by_key(3 * surface.triangles.size());
+  std::vector<std::uint32_t> keys;
+  for (const MovedPrism& p : all) {
+    for (std::uint32_t k = 0; k < p.count; ++k) {
+      keys.push_back(3 * p.face + k);
+      by_key[keys.back()] = p.geo[k];
+    }
+    tet_count[p.face] = static_cast<std::uint8_t>(p.count);
+  }
+  phase = std::make_unique<BroadPhase>(surface, box, grid_cell_size(geo, box), std::move(by_key),
+                                       options.check_leaks);
+  phase->insert(keys);
+}
+
+// The tets of the prisms `moved` to their new places (geometry in parallel, then the phase's
+// lists); builds the phase at the first call.
+void ShellChecker::Impl::move_prisms(const TetMesh& mesh, const std::vector<std::uint32_t>& first,
+                                     const std::vector<std::uint32_t>& moved) {
+  std::vector<MovedPrism> fresh(moved.size());
+  for_each_index(moved.size(), [&](std::size_t i) {
+    MovedPrism& p = fresh[i];
+    p.face = moved[i];
+    p.count = first[p.face + 1] - first[p.face];
+    for (std::uint32_t t = first[p.face]; t < first[p.face + 1]; ++t)
+      p.geo[t - first[p.face]] = tet_geometry(tet_corners(mesh, t));
+  });
+  if (!phase) {
+    build_phase(fresh);
+    return;
+  }
+  std::vector<std::uint32_t> keys;
+  for (const MovedPrism& p : fresh) {
+    for (std::uint32_t k = 0; k < tet_count[p.face]; ++k) phase->remove(3 * p.face + k);
+    for (std::uint32_t k = 0; k < p.count; ++k) {
+      keys.push_back(3 * p.face + k);
+      phase->set_geometry(keys.back(), p.geo[k]);
+    }
+    tet_count[p.face] = static_cast<std::uint8_t>(p.count);
+  }
+  phase->insert(keys);
+}
+
+// The narrow phase for the tets of the prisms `dirty`; remembers the prisms offending now, to be
+// tested again at the next call whether they move or not.
+void ShellChecker::Impl::check_intersections(const TetMesh& mesh,
+                                             const std::vector<std::uint32_t>& first,
+                                             const std::vector<std::uint32_t>& dirty,
+                                             ShellCheckResult& result) {
+  std::vector<std::uint32_t> queries;
+  for (const std::uint32_t f : dirty)
+    for (std::uint32_t k = 0; k < tet_count[f]; ++k) queries.push_back(3 * f + k);
+  const std::vector<TetFindings> found = find_intersections(*phase, queries, inside, options);
+  const Intersections offenders = record_intersections(
+      found, queries, [&](std::uint32_t key) { return first[key / 3] + key % 3; }, options, result);
+  std::fill(offended.begin(), offended.end(), 0);
+  const auto offend = [&](std::uint32_t t) { offended[mesh.source_triangle[t]] = 1; };
+  for (const auto& pair : offenders.pairs) {
+    offend(pair[0]);
+    offend(pair[1]);
+  }
+  for (const std::uint32_t t : offenders.leaking) offend(t);
+}
+
+ShellChecker::ShellChecker(const SurfaceMesh& surface, const ShellCheckOptions& options)
+    : impl_(std::make_unique<Impl>(surface, options)) {}
+
+ShellChecker::~ShellChecker() = default;
+
+ShellCheckResult ShellChecker::check(const TetMesh& mesh) {
+  Impl& m = *impl_;
+  const auto start = Clock::now();
+  ShellCheckResult result;
+  const std::vector<std::uint32_t> inner_points =
+      check_elements(m.surface, mesh, m.options, result);
+  m.check_faces(mesh, result);
+  m.check_inner_points(mesh, inner_points, result);
+  if (m.options.check_overlaps || m.options.check_leaks) {
+    const auto intersection_start = Clock::now();
+    const std::vector<std::uint32_t> first = prism_starts(mesh, m.surface.triangles.size());
+    const std::vector<std::uint8_t> changed = m.changed_prisms(mesh, first);
+    std::vector<std::uint32_t> moved, dirty;
+    for (std::uint32_t f = 0; f < changed.size(); ++f) {
+      if (changed[f]) moved.push_back(f);
+      if (changed[f] || m.offended[f]) dirty.push_back(f);
+    }
+    m.move_prisms(mesh, first, moved);
+    m.check_intersections(mesh, first, dirty, result);
+    result.intersection_seconds = seconds_since(intersection_start);
+  }
+  result.seconds = seconds_since(start);
+  return result;
+}
+
+}  // namespace vdb_shell

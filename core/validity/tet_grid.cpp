@@ -1,0 +1,325 @@
+// tet_grid.cpp — see tet_grid.h.
+#include "core/validity/tet_grid.h"
+
+#include <cmath>
+#include <numeric>
+#include <utility>
+
+#include "core/base/parallel.h"
+
+namespace vdb_shell {
+
+// ---------------------------------------------------------------------------------------------
+// TetGrid
+
+TetGrid::TetGrid(const BBox& box, double cell_size)
+    : box_(box), cell_(cell_size), inv_cell_(1.0 / cell_size) {
+  for (int a = 0; a < 3; ++a)
+    dims_[a] = std::max(1L, static_cast<long>(std::ceil((box_.hi[a] - box_.lo[a]) * inv_cell_)));
+}
+
+bool TetGrid::contains(const BBox& b) const {
+  return b.lo.x >= box_.lo.x && b.lo.y >= box_.lo.y && b.lo.z >= box_.lo.z && b.hi.x <= box_.hi.x &&
+         b.hi.y <= box_.hi.y && b.hi.z <= box_.hi.z;
+}
+
+std::size_t TetGrid::cells_of(const TetGeometry& g, std::uint32_t* out) const {
+  return cells_in(g.box, out, [&](const Vec3d& centre, double reach_scale) {
+    for (int f = 0; f < 4; ++f) {
+      const Vec3d& n = g.n[f];
+      const double c = dot(n, centre);
+      const double reach = reach_scale * (std::abs(n.x) + std::abs(n.y) + std::abs(n.z));
+      if (c - reach > g.hi[f] || c + reach < g.lo[f]) return false;
+    }
+    return true;
+  });
+}
+
+std::size_t TetGrid::cells_of_triangle(const std::array<Vec3d, 3>& t, std::uint32_t* out) const {
+  BBox box;
+  for (const Vec3d& p : t) box.expand(p);
+  const Vec3d n = normalized(cross(t[1] - t[0], t[2] - t[0]));
+  const double plane = dot(n, t[0]);
+  return cells_in(box, out, [&](const Vec3d& centre, double reach_scale) {
+    const double reach = reach_scale * (std::abs(n.x) + std::abs(n.y) + std::abs(n.z));
+    return std::abs(dot(n, centre) - plane) <= reach;
+  });
+}
+
+std::size_t TetGrid::box_cells(const BBox& b) const {
+  std::size_t count = 1;
+  for (int a = 0; a < 3; ++a)
+    count *= static_cast<std::size_t>(cell_of(b.hi[a], a) - cell_of(b.lo[a], a) + 1);
+  return count;
+}
+
+std::size_t TetGrid::num_cells() const {
+  return static_cast<std::size_t>(dims_[0]) * static_cast<std::size_t>(dims_[1]) *
+         static_cast<std::size_t>(dims_[2]);
+}
+
+template <class Keep>
+std::size_t TetGrid::cells_in(const BBox& box, std::uint32_t* out, const Keep& keep) const {
+  long lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = cell_of(box.lo[a], a);
+    hi[a] = cell_of(box.hi[a], a);
+  }
+  const double r = 0.5 * cell_;
+  std::size_t count = 0;
+  for (long i = lo[0]; i <= hi[0]; ++i)
+    for (long j = lo[1]; j <= hi[1]; ++j)
+      for (long k = lo[2]; k <= hi[2]; ++k) {
+        const Vec3d centre = box_.lo + Vec3d{(static_cast<double>(i) + 0.5) * cell_,
+                                             (static_cast<double>(j) + 0.5) * cell_,
+                                             (static_cast<double>(k) + 0.5) * cell_};
+        if (!keep(centre, r)) continue;
+        if (out) out[count] = static_cast<std::uint32_t>((i * dims_[1] + j) * dims_[2] + k);
+        ++count;
+      }
+  return count;
+}
+
+long TetGrid::cell_of(double x, int axis) const {
+  return std::clamp(static_cast<long>(std::floor((x - box_.lo[axis]) * inv_cell_)), 0L,
+                    dims_[axis] - 1);
+}
+
+BBox bounding_box_of(const std::vector<TetGeometry>& geo) {
+  BBox all;
+  for (const TetGeometry& g : geo) {
+    all.expand(g.box.lo);
+    all.expand(g.box.hi);
+  }
+  return all;
+}
+
+double grid_cell_size(const std::vector<TetGeometry>& geo, const BBox& all) {
+  const double n = static_cast<double>(geo.size());
+  double mean_volume = 0.0, mean_side = 0.0;
+  for (const TetGeometry& g : geo) {
+    mean_volume += std::abs(tet_volume(g.p[0], g.p[1], g.p[2], g.p[3])) / n;
+    const Vec3d e = g.box.extent();
+    mean_side += (e.x + e.y + e.z) / (3.0 * n);
+  }
+  double h = std::max(1.5 * std::cbrt(mean_volume), mean_side / 8.0);
+  if (!(h > 0.0)) h = all.max_side() > 0.0 ? all.max_side() : 1.0;
+  const Vec3d ext = all.extent();
+  for (int round = 0; round < 200; ++round) {
+    const double cells =
+        std::ceil(ext.x / h + 1e-9) * std::ceil(ext.y / h + 1e-9) * std::ceil(ext.z / h + 1e-9);
+    double spanned = 0.0;
+    for (const TetGeometry& g : geo) {
+      const Vec3d e = g.box.extent();
+      spanned +=
+          (std::floor(e.x / h) + 2.0) * (std::floor(e.y / h) + 2.0) * (std::floor(e.z / h) + 2.0);
+    }
+    if (cells <= 32.0 * n + 64.0 && spanned <= 64.0 * n) break;
+    h *= 1.25;
+  }
+  return h;
+}
+
+// ---------------------------------------------------------------------------------------------
+// PooledLists
+
+void PooledLists::assign(std::vector<std::uint64_t> start, std::vector<std::uint32_t> values) {
+  const std::size_t slots = start.size() - 1;
+  size_.resize(slots);
+  for (std::size_t s = 0; s < slots; ++s)
+    size_[s] = static_cast<std::uint32_t>(start[s + 1] - start[s]);
+  start.pop_back();
+  begin_ = std::move(start);
+  pool_ = std::move(values);
+  unused_ = 0;
+}
+
+std::uint64_t PooledLists::relocate(std::size_t s, std::size_t count) {
+  unused_ += size_[s];
+  const std::uint64_t at = pool_.size();
+  pool_.resize(pool_.size() + count);
+  begin_[s] = at;
+  size_[s] = static_cast<std::uint32_t>(count);
+  return at;
+}
+
+void PooledLists::set(std::size_t s, const std::uint32_t* first, std::size_t count) {
+  if (count <= size_[s]) {
+    unused_ += size_[s] - count;
+    size_[s] = static_cast<std::uint32_t>(count);
+  } else {
+    relocate(s, count);
+  }
+  std::copy(first, first + count, pool_.begin() + static_cast<std::ptrdiff_t>(begin_[s]));
+  compact_if_sparse();
+}
+
+void PooledLists::insert_sorted(std::size_t s, std::uint32_t v) {
+  const std::uint64_t from = begin_[s];
+  const std::size_t n = size_[s];
+  const std::uint64_t to = relocate(s, n + 1);  // pool_ may move: indices only
+  std::size_t k = 0;
+  for (; k < n && pool_[from + k] < v; ++k) pool_[to + k] = pool_[from + k];
+  pool_[to + k] = v;
+  for (; k < n; ++k) pool_[to + k + 1] = pool_[from + k];
+  compact_if_sparse();
+}
+
+void PooledLists::erase_sorted(std::size_t s, std::uint32_t v) {
+  const auto first = pool_.begin() + static_cast<std::ptrdiff_t>(begin_[s]);
+  const auto last = first + size_[s];
+  const auto at = std::lower_bound(first, last, v);
+  std::copy(at + 1, last, at);
+  --size_[s];
+  ++unused_;
+}
+
+void PooledLists::compact_if_sparse() {
+  if (unused_ <= 1024 || 2 * unused_ <= pool_.size()) return;
+  std::vector<std::uint32_t> pool;
+  pool.reserve(pool_.size() - unused_);
+  for (std::size_t s = 0; s < size_.size(); ++s) {
+    const std::uint64_t at = pool.size();
+    pool.insert(pool.end(), begin(s), end(s));
+    begin_[s] = at;
+  }
+  pool_ = std::move(pool);
+  unused_ = 0;
+}
+
+// ---------------------------------------------------------------------------------------------
+// BroadPhase
+
+namespace {
+
+// The cells of items [0, n): item i's are cells[start[i], start[i + 1]). cells_of(i, out)
+// writes them to `out`, which has room for bound(i) of them, and returns how many. Blocks of
+// items fill buffers of their own in parallel, joined in item order.
+template <class Bound, class CellsOf>
+std::vector<std::uint32_t> collect_cells(std::size_t n, const Bound& bound, const CellsOf& cells_of,
+                                         std::vector<std::uint64_t>& start) {
+  constexpr std::size_t kBlock = 128;
+  std::vector<std::vector<std::uint32_t>> found((n + kBlock - 1) / kBlock);
+  start.assign(n + 1, 0);
+  for_each_index(
+      found.size(),
+      [&](std::size_t b) {
+        std::vector<std::uint32_t>& out = found[b];
+        for (std::size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) {
+          const std::size_t at = out.size();
+          out.resize(at + bound(i));
+          out.resize(at + cells_of(i, out.data() + at));
+          start[i + 1] = out.size() - at;
+        }
+      },
+      2);
+  for (std::size_t i = 0; i < n; ++i) start[i + 1] += start[i];
+  std::vector<std::uint32_t> cells(start[n]);
+  for (std::size_t b = 0; b < found.size(); ++b)
+    std::copy(found[b].begin(), found[b].end(),
+              cells.begin() + static_cast<std::ptrdiff_t>(start[b * kBlock]));
+  return cells;
+}
+
+// The inverse of collect_cells()'s lists: per cell c, items[cell_start[c], cell_start[c + 1])
+// are the ids of the items listing it (id[i] for item i), in item order.
+template <class Index>
+void invert_cells(const std::vector<std::uint64_t>& start, const std::vector<std::uint32_t>& cells,
+                  const std::vector<std::uint32_t>& id, std::size_t num_cells,
+                  std::vector<Index>& cell_start, std::vector<std::uint32_t>& items) {
+  cell_start.assign(num_cells + 1, 0);
+  for (const std::uint32_t c : cells) ++cell_start[c + 1];
+  for (std::size_t c = 0; c < num_cells; ++c) cell_start[c + 1] += cell_start[c];
+  items.resize(cells.size());
+  std::vector<Index> fill(cell_start.begin(), cell_start.end() - 1);
+  for (std::size_t i = 0; i + 1 < start.size(); ++i)
+    for (std::uint64_t k = start[i]; k < start[i + 1]; ++k) items[fill[cells[k]]++] = id[i];
+}
+
+}  // namespace
+
+BroadPhase::BroadPhase(const SurfaceMesh& surface, const BBox& box, double cell_size,
+                       std::vector<TetGeometry> geometry, bool enter_triangles)
+    : surface_(surface),
+      grid_(box, cell_size),
+      geo_(std::move(geometry)),
+      box_(geo_.size()),
+      state_(geo_.size(), kAbsent),
+      key_cells_(geo_.size()),
+      cell_keys_(grid_.num_cells()) {
+  if (enter_triangles) this->enter_triangles();
+}
+
+void BroadPhase::enter_triangles() {
+  const std::size_t n_faces = surface_.triangles.size();
+  std::vector<std::uint64_t> start;
+  std::vector<BBox> boxes(n_faces);
+  for_each_index(n_faces, [&](std::size_t f) {
+    for (const Vec3d& p : triangle_corners(surface_, f)) boxes[f].expand(p);
+  });
+  const auto meets_grid = [&](std::size_t f) { return boxes_overlap(boxes[f], grid_.box()); };
+  const std::vector<std::uint32_t> cells = collect_cells(
+      n_faces, [&](std::size_t f) { return meets_grid(f) ? grid_.box_cells(boxes[f]) : 0; },
+      [&](std::size_t f, std::uint32_t* out) -> std::size_t {
+        // A triangle outside the grid's box meets no tet in the grid.
+        return meets_grid(f) ? grid_.cells_of_triangle(triangle_corners(surface_, f), out) : 0;
+      },
+      start);
+  std::vector<std::uint32_t> id(n_faces);
+  std::iota(id.begin(), id.end(), 0u);
+  invert_cells(start, cells, id, grid_.num_cells(), triangle_start_, triangle_items_);
+}
+
+void BroadPhase::set_geometry(std::uint32_t key, const TetGeometry& g) { geo_[key] = g; }
+
+void BroadPhase::insert(const std::vector<std::uint32_t>& keys) {
+  const std::size_t n = keys.size();
+  std::vector<std::uint8_t> stray(n, 0);
+  std::vector<std::uint64_t> start;
+  for_each_index(n, [&](std::size_t i) { stray[i] = grid_.contains(geo_[keys[i]].box) ? 0 : 1; });
+  std::vector<std::uint32_t> cells = collect_cells(
+      n, [&](std::size_t i) { return stray[i] ? 0 : grid_.box_cells(geo_[keys[i]].box); },
+      [&](std::size_t i, std::uint32_t* out) -> std::size_t {
+        return stray[i] ? 0 : grid_.cells_of(geo_[keys[i]], out);
+      },
+      start);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint32_t key = keys[i];
+    box_[key] = geo_[key].box;
+    state_[key] = stray[i] ? kStray : kInGrid;
+    if (stray[i]) stray_keys_.push_back(key);
+  }
+  if (size_ == 0) {  // every list is empty: all of them in one pass
+    std::vector<std::uint64_t> key_start(geo_.size() + 1, 0);
+    for (std::size_t i = 0; i < n; ++i) key_start[keys[i] + 1] = start[i + 1] - start[i];
+    for (std::size_t k = 0; k < geo_.size(); ++k) key_start[k + 1] += key_start[k];
+    std::vector<std::uint64_t> cell_start;
+    std::vector<std::uint32_t> items;
+    invert_cells(start, cells, keys, grid_.num_cells(), cell_start, items);
+    cell_keys_.assign(std::move(cell_start), std::move(items));
+    key_cells_.assign(std::move(key_start), std::move(cells));  // keys ascending: in key order
+  } else {
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::uint32_t key = keys[i];
+      key_cells_.set(key, cells.data() + start[i], start[i + 1] - start[i]);
+      for (std::uint64_t k = start[i]; k < start[i + 1]; ++k)
+        cell_keys_.insert_sorted(cells[k], key);
+    }
+  }
+  size_ += n;
+}
+
+void BroadPhase::remove(std::uint32_t key) {
+  if (state_[key] == kAbsent) return;
+  if (state_[key] == kStray) {
+    stray_keys_.erase(std::find(stray_keys_.begin(), stray_keys_.end(), key));
+  } else {
+    for (const std::uint32_t* c = key_cells_.begin(key); c != key_cells_.end(key); ++c)
+      cell_keys_.erase_sorted(*c, key);
+    key_cells_.set(key, nullptr, 0);
+  }
+  state_[key] = kAbsent;
+  --size_;
+}
+
+}  // namespace vdb_shell

@@ -1,0 +1,210 @@
+// tet_grid.h — the broad phase of the overlap and leak tests: a uniform grid of cubic cells in
+// which every tet enters the cells it may intersect and every surface triangle the cells its
+// plane crosses. Two tets, or a tet and a triangle, can only intersect when they share a cell;
+// the pairs that do are the candidates of the narrow phase (tet_intersections.h).
+//
+// TetGrid maps geometry to cells; BroadPhase keeps tets (under integer keys that the caller
+// chooses) and triangles in the cells of a TetGrid, enters, moves and removes tets, and lists
+// the candidates of a tet. check_shell() enters every tet once; ShellChecker keeps one
+// BroadPhase over a sequence of shells and moves only the tets that changed.
+//
+// Lengths are world units. Internal to core/validity (not installed).
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "core/base/surface_mesh.h"
+#include "core/base/vec3.h"
+#include "core/validity/tet_predicates.h"
+
+namespace vdb_shell {
+
+/// A uniform grid of cubic cells over a box. The cells a body may intersect are those of its
+/// bounding box (clamped to the grid) that a plane test does not separate from it: the test is
+/// conservative. Geometry outside the box is clamped to the border cells, where the plane test
+/// may drop it: callers keep their tets inside the box (contains()).
+class TetGrid {
+ public:
+  /// \param box        the grid's extent, world units
+  /// \param cell_size  side of a cell, world units, > 0
+  TetGrid(const BBox& box, double cell_size);
+
+  /// Whether `b` lies inside the grid's box.
+  bool contains(const BBox& b) const;
+
+  /// The cells tet `g` may intersect (those no face plane of the tet separates from it), written
+  /// to `out` (when not null) in increasing order; returns how many.
+  std::size_t cells_of(const TetGeometry& g, std::uint32_t* out) const;
+
+  /// The cells the plane of triangle `t` (corners, world units) crosses within the triangle's
+  /// bounding box, as cells_of().
+  std::size_t cells_of_triangle(const std::array<Vec3d, 3>& t, std::uint32_t* out) const;
+
+  /// How many cells `b` covers (clamped to the grid): a bound of the cells of anything inside it.
+  std::size_t box_cells(const BBox& b) const;
+
+  const BBox& box() const { return box_; }
+  std::size_t num_cells() const;
+
+ private:
+  // Cells of `box` (clamped to the grid) for which keep(centre, half side) holds.
+  template <class Keep>
+  std::size_t cells_in(const BBox& box, std::uint32_t* out, const Keep& keep) const;
+  long cell_of(double x, int axis) const;
+
+  BBox box_;
+  double cell_ = 1.0, inv_cell_ = 1.0;  // world units, 1 / world units
+  long dims_[3] = {1, 1, 1};
+};
+
+/// The box of all of `geo`'s boxes.
+BBox bounding_box_of(const std::vector<TetGeometry>& geo);
+
+/// Cell size (world units) of a TetGrid over `all` for the tets `geo`: about the edge of a cube of
+/// 1.5^3 times the mean tet volume (at least an eighth of the tets' mean box side), so that
+/// slivers enter few cells, made larger until `all` has at most 32 cells per tet and the tets'
+/// boxes span at most 64 cells each on average.
+double grid_cell_size(const std::vector<TetGeometry>& geo, const BBox& all);
+
+/// Lists of 32-bit values, one per slot, in one pool: built all at once (as a CSR array), then
+/// edited one list at a time. A list that grows moves to the end of the pool; the pool is
+/// compacted when more than half of it is unused.
+class PooledLists {
+ public:
+  explicit PooledLists(std::size_t slots = 0) : begin_(slots, 0), size_(slots, 0) {}
+
+  /// Replaces every list: list s becomes values[start[s], start[s + 1]); `start` has one entry
+  /// per slot and one more.
+  void assign(std::vector<std::uint64_t> start, std::vector<std::uint32_t> values);
+
+  const std::uint32_t* begin(std::size_t s) const { return pool_.data() + begin_[s]; }
+  const std::uint32_t* end(std::size_t s) const { return begin(s) + size_[s]; }
+
+  /// Replaces list s by the `count` values from `first`.
+  void set(std::size_t s, const std::uint32_t* first, std::size_t count);
+  /// Inserts `v` into the ascending list s, which does not hold it.
+  void insert_sorted(std::size_t s, std::uint32_t v);
+  /// Removes `v` from the ascending list s, which holds it.
+  void erase_sorted(std::size_t s, std::uint32_t v);
+
+ private:
+  // Moves list s to `count` fresh entries at the end of the pool, its old entries unused.
+  std::uint64_t relocate(std::size_t s, std::size_t count);
+  void compact_if_sparse();
+
+  std::vector<std::uint64_t> begin_;  // per slot: its first entry in pool_
+  std::vector<std::uint32_t> size_;   // per slot
+  std::vector<std::uint32_t> pool_;
+  std::size_t unused_ = 0;  // entries of pool_ in no list
+};
+
+/// Tets and surface triangles in the cells of one TetGrid. A tet is named by a key in
+/// [0, key_count()); a key is absent, in the grid, or stray: its box leaves the grid's box, and it
+/// is then a candidate of every tet and every triangle a candidate of it. Cell lists are kept in
+/// increasing key order.
+class BroadPhase {
+ public:
+  /// A grid over `box` with cells of side `cell_size` (world units) for the tets of keys
+  /// [0, geometry.size()), none entered yet; tet k has the geometry geometry[k] until
+  /// set_geometry() changes it. With `enter_triangles`, every triangle of `surface` whose box
+  /// meets `box` is entered in the cells of TetGrid::cells_of_triangle(). `surface` must outlive
+  /// the object.
+  BroadPhase(const SurfaceMesh& surface, const BBox& box, double cell_size,
+             std::vector<TetGeometry> geometry, bool enter_triangles);
+
+  /// Gives tet `key` the geometry `g`. \pre !contains(key)
+  void set_geometry(std::uint32_t key, const TetGeometry& g);
+  /// Enters the tets `keys` (ascending, absent) at their geometry. Their cells are found in
+  /// parallel; into an empty phase the cell lists are built in one pass.
+  void insert(const std::vector<std::uint32_t>& keys);
+  /// Removes tet `key`; does nothing when it is absent.
+  void remove(std::uint32_t key);
+
+  const SurfaceMesh& surface() const { return surface_; }
+  std::size_t key_count() const { return geo_.size(); }
+  /// How many keys are in the grid or stray.
+  std::size_t size() const { return size_; }
+  bool contains(std::uint32_t key) const { return state_[key] != kAbsent; }
+  const TetGeometry& geometry(std::uint32_t key) const { return geo_[key]; }
+  /// Its box, kept apart from the geometry so that the candidates' boxes are read compactly.
+  const BBox& box(std::uint32_t key) const { return box_[key]; }
+
+  /// Calls visit(other) once for every key `other` that shares a cell with tet `key` (`key`
+  /// itself included), every stray key, and, when `key` is stray, every key. With `only_greater`
+  /// the keys below `key` in its cells are skipped. `mark` has one entry per key, none equal to
+  /// `stamp` before the call; it marks the keys visited.
+  template <class Visit>
+  void for_each_tet_near(std::uint32_t key, bool only_greater, std::vector<std::uint32_t>& mark,
+                         std::uint32_t stamp, const Visit& visit) const;
+
+  /// Calls visit(f) once for every surface triangle f that shares a cell with tet `key`, or for
+  /// every triangle when `key` is stray; for none unless the triangles were entered. `mark`: one
+  /// entry per triangle, as above.
+  template <class Visit>
+  void for_each_triangle_near(std::uint32_t key, std::vector<std::uint32_t>& mark,
+                              std::uint32_t stamp, const Visit& visit) const;
+
+ private:
+  enum State : std::uint8_t { kAbsent, kInGrid, kStray };
+
+  void enter_triangles();
+
+  const SurfaceMesh& surface_;
+  TetGrid grid_;
+  std::vector<TetGeometry> geo_;  // per key
+  std::vector<BBox> box_;         // per key
+  std::vector<State> state_;      // per key
+  std::size_t size_ = 0;
+  PooledLists key_cells_;                  // per key: its cells, ascending (none when stray)
+  PooledLists cell_keys_;                  // per cell: its keys, ascending
+  std::vector<std::uint32_t> stray_keys_;  // in no particular order
+  std::vector<std::uint32_t> triangle_start_, triangle_items_;  // per cell: its triangles
+};
+
+template <class Visit>
+void BroadPhase::for_each_tet_near(std::uint32_t key, bool only_greater,
+                                   std::vector<std::uint32_t>& mark, std::uint32_t stamp,
+                                   const Visit& visit) const {
+  std::uint32_t* const marks = mark.data();
+  const auto once = [&](std::uint32_t other) {
+    if (marks[other] == stamp) return;
+    marks[other] = stamp;
+    visit(other);
+  };
+  if (state_[key] == kStray) {
+    for (std::uint32_t other = 0; other < state_.size(); ++other)
+      if (state_[other] != kAbsent) once(other);
+    return;
+  }
+  for (const std::uint32_t* c = key_cells_.begin(key); c != key_cells_.end(key); ++c) {
+    const std::uint32_t* first = cell_keys_.begin(*c);
+    const std::uint32_t* last = cell_keys_.end(*c);
+    for (const std::uint32_t* it = only_greater ? std::upper_bound(first, last, key) : first;
+         it != last; ++it)
+      once(*it);
+  }
+  for (const std::uint32_t other : stray_keys_) once(other);
+}
+
+template <class Visit>
+void BroadPhase::for_each_triangle_near(std::uint32_t key, std::vector<std::uint32_t>& mark,
+                                        std::uint32_t stamp, const Visit& visit) const {
+  if (triangle_start_.empty()) return;
+  if (state_[key] == kStray) {
+    for (std::uint32_t f = 0; f < surface_.triangles.size(); ++f) visit(f);
+    return;
+  }
+  for (const std::uint32_t* c = key_cells_.begin(key); c != key_cells_.end(key); ++c)
+    for (std::uint32_t i = triangle_start_[*c]; i < triangle_start_[*c + 1]; ++i) {
+      const std::uint32_t f = triangle_items_[i];
+      if (mark[f] == stamp) continue;
+      mark[f] = stamp;
+      visit(f);
+    }
+}
+
+}  // namespace vdb_shell
