@@ -8,6 +8,7 @@
 
 #include "core/assemble/quality.h"
 #include "core/base/errors.h"
+#include "core/base/timer.h"
 
 namespace vdb_shell {
 namespace {
@@ -182,7 +183,7 @@ AssembleResult assemble_shell(const SurfaceMesh& surface, const ShellInput& inpu
     result.dropped_degenerate_tets += static_cast<std::size_t>(prism.dropped);
   }
   if (options.compute_quality) mesh.quality = tet_qualities(mesh);
-  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.seconds = seconds_since(start);
   return result;
 }
 

@@ -10,6 +10,7 @@
 
 #include "core/assemble/quality.h"
 #include "core/base/index_lists.h"
+#include "core/base/timer.h"
 
 namespace vdb_shell {
 namespace {
@@ -591,7 +592,7 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
     search.faces_around(lowered, seeds);
   }
 
-  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  out.seconds = seconds_since(t0);
   monitor.report(0.9);
 
   // The incremental checks trusted unchanged tets; the result carries one full check (the

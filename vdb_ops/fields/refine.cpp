@@ -13,47 +13,12 @@
 #include <cmath>
 #include <vector>
 
+#include "core/base/geometry.h"
 #include "vdb_ops/fields/closest_triangle.h"
 #include "vdb_ops/fields/leaf_bits.h"
 
 namespace vdb_shell {
 namespace fields_detail {
-
-namespace {
-
-/// Squared distance from p to triangle (a, b, c) (Ericson, Real-Time Collision Detection 5.1.5).
-double point_triangle_distance2(const openvdb::Vec3d& p, const openvdb::Vec3d& a,
-                                const openvdb::Vec3d& b, const openvdb::Vec3d& c) {
-  const openvdb::Vec3d ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0.0 && d2 <= 0.0) return ap.lengthSqr();
-  const openvdb::Vec3d bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0.0 && d4 <= d3) return bp.lengthSqr();
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
-    const double v = d1 / (d1 - d3);
-    return (ap - ab * v).lengthSqr();
-  }
-  const openvdb::Vec3d cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0.0 && d5 <= d6) return cp.lengthSqr();
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
-    const double w = d2 / (d2 - d6);
-    return (ap - ac * w).lengthSqr();
-  }
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
-    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-    return (bp - (c - b) * w).lengthSqr();
-  }
-  const double denom = 1.0 / (va + vb + vc);
-  const double v = vb * denom, w = vc * denom;
-  return (ap - ab * v - ac * w).lengthSqr();
-}
-
-}  // namespace
 
 /// One Jacobi pass of closest-triangle propagation: every active voxel also measures its distance
 /// to the triangles its 26 neighbours found closest and keeps the smallest. OpenVDB's band
@@ -111,14 +76,17 @@ void refine_by_neighbours_jacobi(FloatGrid& sdf, const openvdb::Int32Grid& index
                   }
                 }
             if (n == 0) continue;
-            const openvdb::Vec3d p = it.getCoord().asVec3d();
+            const Vec3d p(it.getCoord()[0], it.getCoord()[1], it.getCoord()[2]);
             const float phi = *it;
             double best = double(std::abs(phi)) / h;
             best *= best;
             for (int k = 0; k < n; ++k) {
               const openvdb::Vec3I& t = m.triangles[std::size_t(cand[k])];
-              best = std::min(best, point_triangle_distance2(p, m.points[t[0]], m.points[t[1]],
-                                                             m.points[t[2]]));
+              auto corner = [&](int c) {
+                const openvdb::Vec3s& q = m.points[t[c]];
+                return Vec3d(q[0], q[1], q[2]);
+              };
+              best = std::min(best, point_triangle_distance2(p, corner(0), corner(1), corner(2)));
             }
             const float d = float(std::sqrt(best) * h);
             if (d < std::abs(phi)) it.setValue(phi < 0.0f ? -d : d);
