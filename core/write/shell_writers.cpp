@@ -19,6 +19,7 @@
 
 #include "core/base/errors.h"
 #include "core/base/file_name.h"
+#include "core/base/tet_faces.h"
 #include "core/write/atomic_file.h"
 
 namespace vdb_shell {
@@ -524,31 +525,13 @@ TetFormat tet_format_from_path(const std::string& path, int msh_version) {
 }
 
 std::vector<Triangle> tet_boundary_faces(const TetMesh& mesh) {
-  // Faces opposite vertex 0, 1, 2, 3 of a positive tet (a, b, c, d), each with its normal
-  // (right-hand rule) pointing out of the tet.
-  struct FaceKey {
-    std::array<std::uint32_t, 3> sorted;
-    std::uint64_t slot;  // 4 * tet + local face
-  };
-  std::vector<FaceKey> keys;
-  keys.reserve(4 * mesh.tets.size());
-  for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
-    const Tet& tet = mesh.tets[t];
-    for (int f = 0; f < 4; ++f) {
-      std::array<std::uint32_t, 3> s = {tet[kTetOutwardFace[f][0]], tet[kTetOutwardFace[f][1]],
-                                        tet[kTetOutwardFace[f][2]]};
-      std::sort(s.begin(), s.end());
-      keys.push_back({s, 4 * static_cast<std::uint64_t>(t) + static_cast<std::uint64_t>(f)});
-    }
-  }
-  std::sort(keys.begin(), keys.end(), [](const FaceKey& a, const FaceKey& b) {
-    return a.sorted != b.sorted ? a.sorted < b.sorted : a.slot < b.slot;
-  });
-  std::vector<std::uint8_t> boundary(keys.size(), 0);
-  for (std::size_t i = 0; i < keys.size();) {
+  // A face no other tet shares is a boundary face; listed in (tet, local face) order.
+  const std::vector<FaceRecord> sorted = sorted_tet_faces(mesh);
+  std::vector<std::uint8_t> boundary(sorted.size(), 0);
+  for (std::size_t i = 0; i < sorted.size();) {
     std::size_t j = i + 1;
-    while (j < keys.size() && keys[j].sorted == keys[i].sorted) ++j;
-    if (j - i == 1) boundary[keys[i].slot] = 1;
+    while (j < sorted.size() && sorted[j].same_key(sorted[i])) ++j;
+    if (j - i == 1) boundary[4 * std::size_t(sorted[i].tet) + sorted[i].face] = 1;
     i = j;
   }
   std::vector<Triangle> faces;
