@@ -243,7 +243,6 @@ ShellCheckResult ShellChecker::check(const TetMesh& mesh) {
   m.check_faces(mesh, result);
   m.check_inner_points(mesh, inner_points, result);
   if (m.options.check_overlaps || m.options.check_leaks) {
-    const auto intersection_start = Clock::now();
     const std::vector<std::uint32_t> first = prism_starts(mesh, m.surface.triangles.size());
     const std::vector<std::uint8_t> changed = m.changed_prisms(mesh, first);
     std::vector<std::uint32_t> moved, dirty;
@@ -253,7 +252,6 @@ ShellCheckResult ShellChecker::check(const TetMesh& mesh) {
     }
     m.move_prisms(mesh, first, moved);
     m.check_intersections(mesh, first, dirty, result);
-    result.intersection_seconds = seconds_since(intersection_start);
   }
   result.seconds = seconds_since(start);
   return result;

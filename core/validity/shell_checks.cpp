@@ -126,9 +126,7 @@ ShellCheckResult check_shell(const SurfaceMesh& surface, const TetMesh& mesh,
   const InsideTester inside(surface, on_surface_distance(surface, options));
   check_inner_points(mesh, inner_points, inside, options, result);
   if (options.check_overlaps || options.check_leaks) {
-    const auto intersection_start = Clock::now();
     check_intersections(surface, mesh, inside, options, result);
-    result.intersection_seconds = seconds_since(intersection_start);
   }
   result.seconds = seconds_since(start);
   return result;

@@ -97,8 +97,7 @@ struct ShellCheckResult {
 
   bool too_many_tets = false;  ///< T > 3F
 
-  double seconds = 0.0;               ///< wall time of check_shell()
-  double intersection_seconds = 0.0;  ///< of which the overlap and leak tests
+  double seconds = 0.0;  ///< wall time of check_shell()
 
   /// True when no check failed.
   bool valid() const;
