@@ -25,6 +25,12 @@ void StageMonitor::check() const {
     throw CancelledError("cancelled during the " + stage_ + " stage; nothing was written");
 }
 
+void StageMonitor::alive() const {
+  check();
+  if (progress_ && (alive_calls_.fetch_add(1, std::memory_order_relaxed) & 63) == 63)
+    emit(0.0, false);  // clamped up to the last fraction reported
+}
+
 void StageMonitor::report(double fraction) const {
   check();
   if (progress_) emit(fraction, false);

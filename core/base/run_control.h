@@ -43,6 +43,9 @@ class StageMonitor {
 
   /// \throw CancelledError if cancellation was asked for. One atomic load: call it anywhere.
   void check() const;
+  /// check(), and every 64th call a report of the fraction reached so far: long loops that do
+  /// not know their share of the stage keep the caller's display alive. Thread-safe.
+  void alive() const;
   /// Reports `fraction` of the stage done (clamped to [0, 1], never below an earlier report),
   /// at most every 50 ms; checks the flag. Thread-safe.
   void report(double fraction) const;
@@ -67,6 +70,7 @@ class StageMonitor {
   mutable double reported_ = 0.0;
   mutable std::chrono::steady_clock::time_point last_{};
   mutable std::atomic<std::size_t> done_{0};
+  mutable std::atomic<std::size_t> alive_calls_{0};
   mutable double part_lo_ = 0.0, part_hi_ = 0.0;
   mutable std::size_t part_items_ = 0;
 };

@@ -263,7 +263,7 @@ class ShellSearch {
     };
     std::size_t unwelded = 0;
     for (std::size_t head = 0; head < queue.size(); ++head) {
-      if ((head & 1023) == 1023) monitor_.check();
+      if ((head & 1023) == 1023) monitor_.alive();
       const std::uint32_t f = queue[head];
       queued[f] = 0;
       const LocalPrism p = prism(s, f);
@@ -291,7 +291,7 @@ class ShellSearch {
     std::size_t unwelded = 0;
     std::vector<std::uint32_t> step, around, moved;
     for (const auto& [f, g] : pairs) {
-      monitor_.check();
+      monitor_.alive();
       for (;;) {
         const LocalPrism a = prism(s, f), b = prism(s, g);
         step.clear();
