@@ -103,39 +103,11 @@ using test::rotated;
 using test::StraightTrace;
 
 void run_straightness() {
-  struct Case {
-    std::string name;
-    SurfaceMesh mesh;
-    std::vector<StraightTrace> straight;
-  };
-  std::vector<Case> cases;
-  for (const bool rotate : {false, true}) {
-    Case box{rotate ? "box, rotated" : "box", make_shape("box", 1), {}};
-    for (std::size_t v = 0; v < box.mesh.points.size(); ++v)
-      box.straight.push_back({v, normalized(-box.mesh.points[v])});
-    cases.push_back(std::move(box));
-  }
-  for (const bool rotate : {false, true}) {
-    Case cylinder{rotate ? "cylinder, rotated" : "cylinder", make_shape("cylinder", 2), {}};
-    for (std::size_t v = 0; v < cylinder.mesh.points.size(); ++v) {
-      const Vec3d& p = cylinder.mesh.points[v];
-      const double rho = std::hypot(p.x, p.y);
-      if (rho < 1e-12 && std::fabs(p.z) > 0.5 - 1e-12)
-        cylinder.straight.push_back({v, {0, 0, p.z > 0 ? -1.0 : 1.0}});
-      else if (std::fabs(p.z) < 1e-12 && std::fabs(rho - 0.5) < 1e-9)
-        cylinder.straight.push_back({v, normalized(Vec3d(-p.x, -p.y, 0))});
-    }
-    cases.push_back(std::move(cylinder));
-  }
-  for (Case& c : cases) {
-    if (c.name.find("rotated") == std::string::npos) continue;
-    for (Vec3d& p : c.mesh.points) p = rotated(p, 20.0, 30.0);
-    for (StraightTrace& s : c.straight) s.direction = rotated(s.direction, 20.0, 30.0);
-  }
+  const std::vector<test::StraightCase> cases = test::straight_trace_cases();
   std::printf(
       "| shape | straight traces | step, voxels | Euler | RK2 | RK4 |\n"
       "|---|---|---|---|---|---|\n");
-  for (const Case& c : cases) {
+  for (const test::StraightCase& c : cases) {
     FieldOptions options;
     options.resolution = 128;
     const std::unique_ptr<Fields> fields = build_fields(c.mesh, options);

@@ -322,44 +322,11 @@ using test::rotated;
 using test::StraightTrace;
 
 TEST(TraceVdb, RungeKuttaTracesStayAsStraightAsEuler) {
-  // Traces that are straight segments in the exact field:
-  //   box (2x2 per face): every vertex lies on an axis of symmetry, so its trace runs straight to
-  //     the centre (corners and edge midpoints along medial surfaces);
-  //   cylinder at detail 2 (a 16-sided prism): cap centres run down the axis; side vertices at
-  //     mid-height lie on a mirror plane through the axis and on z = 0, so they run straight to
-  //     the axis along the medial surface between two side faces (at 22.5 degrees to the grid).
-  // Axis-aligned, the voxel grid shares most of these symmetries; rotated by 20 degrees about x
-  // and 30 about z, it shares none, and the traces must stay straight on their own.
-  struct Case {
-    std::string name;
-    SurfaceMesh mesh;
-    std::vector<StraightTrace> straight;
-  };
-  std::vector<Case> cases;
-  for (double angle : {0.0, 1.0}) {
-    Case c{angle > 0 ? "box, rotated" : "box", shape("box", 1), {}};
-    for (std::size_t v = 0; v < c.mesh.points.size(); ++v)
-      c.straight.push_back({v, normalized(-c.mesh.points[v])});
-    cases.push_back(std::move(c));
-  }
-  for (double angle : {0.0, 1.0}) {
-    Case c{angle > 0 ? "cylinder, rotated" : "cylinder", shape("cylinder", 2), {}};
-    for (std::size_t v = 0; v < c.mesh.points.size(); ++v) {
-      const Vec3d& p = c.mesh.points[v];
-      const double rho = std::hypot(p.x, p.y);
-      if (rho < 1e-12 && std::fabs(p.z) > 0.5 - 1e-12)
-        c.straight.push_back({v, {0, 0, p.z > 0 ? -1.0 : 1.0}});
-      else if (std::fabs(p.z) < 1e-12 && std::fabs(rho - 0.5) < 1e-9)
-        c.straight.push_back({v, normalized(Vec3d(-p.x, -p.y, 0))});
-    }
-    cases.push_back(std::move(c));
-  }
-  for (Case& c : cases) {
-    if (c.name.find("rotated") == std::string::npos) continue;
-    for (Vec3d& p : c.mesh.points) p = rotated(p, 20.0, 30.0);
-    for (StraightTrace& s : c.straight) s.direction = rotated(s.direction, 20.0, 30.0);
-  }
-  for (const Case& c : cases) {
+  // Traces that are straight segments in the exact field (straight_traces.h: box and cylinder).
+  // Axis-aligned, the voxel grid shares most of these symmetries; rotated, it shares none, and
+  // the traces must stay straight on their own.
+  const std::vector<test::StraightCase> cases = test::straight_trace_cases();
+  for (const test::StraightCase& c : cases) {
     ASSERT_GE(c.straight.size(), 6u) << c.name;
     const Fields& f = fields_of(c.name, c.mesh, 128);
     // The default step (half a voxel), and 2 voxels where the integrator's own error shows.
