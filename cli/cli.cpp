@@ -215,7 +215,7 @@ struct RunOutcome {
 
 /// The one-line summary of a shell on stderr.
 std::string summary_line(const std::string& output, const ShellResult& r, double seconds) {
-  return output + ": " + std::to_string(r.counts.tets) + " tets from " +
+  return output + ": " + std::to_string(r.mesh.tets.size()) + " tets from " +
          std::to_string(r.input.stats.faces) + " faces, coverage " + fmt(r.quality.coverage) +
          ", quality min " + fmt(r.quality.min_quality) + " median " +
          fmt(r.quality.median_quality) + ", stops critical " +
@@ -291,7 +291,7 @@ RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& 
   if (opt.verbose) err << "vdb_shell: timings: " << progress.timings() << "\n";
 
   outcome.shell = true;
-  outcome.tets = r.counts.tets;
+  outcome.tets = r.mesh.tets.size();
   outcome.coverage = r.quality.coverage;
   outcome.seconds = t_all;
   outcome.summary = summary_line(opt.output, r, t_all);

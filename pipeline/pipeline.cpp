@@ -106,7 +106,6 @@ ShellResult run(const LoadedSurface& surface, const ShellOptions& options,
   r.input = {surface.source, surface.stats, surface.flipped};
   r.surface = mesh;
   r.notices = surface.notices;
-  r.traces_only = options.traces_only;
 
   std::shared_ptr<const Fields> fields;
   {
@@ -125,7 +124,6 @@ ShellResult run(const LoadedSurface& surface, const ShellOptions& options,
     r.timings.fields = seconds_since(t0);
   }
   r.field_stats = fields->stats();
-  r.field_parameters = fields->parameters();
   r.notices.insert(r.notices.end(), r.field_stats.notices.begin(), r.field_stats.notices.end());
   if (options.keep_fields) r.fields = fields;
 
@@ -163,8 +161,6 @@ ShellResult run(const LoadedSurface& surface, const ShellOptions& options,
     r.timings.check = valid.checks.seconds;
 
     const AssembleResult& shell = valid.shell;
-    r.counts.tets = shell.mesh.tets.size();
-    r.counts.points = shell.mesh.points.size();
     r.counts.dropped_degenerate_tets = shell.dropped_degenerate_tets;
     r.counts.collapsed_prisms = shell.collapsed_prisms;
     r.counts.welded_vertices = inner.welded - std::min(inner.welded, valid.unwelded);
@@ -228,8 +224,7 @@ ShellResult build_shell(const SurfaceMesh& mesh, const ShellOptions& options,
 }
 
 LoadedSurface load_level_set_surface(const std::string& vdb_path, const ShellOptions& options) {
-  require(options.adaptivity >= 0 && options.adaptivity <= 1, "--adaptivity", options.adaptivity,
-          "must be in [0, 1]");
+  // level_set_to_soup() checks the adaptivity.
   return make_surface(level_set_to_soup(vdb_path, options.grid_name, options.adaptivity), vdb_path);
 }
 
@@ -273,12 +268,12 @@ std::string report_json(const ShellResult& r, const ReportFiles& files, double r
                        {"merge", traces.stops(StopReason::kMerge)},
                        {"flux", traces.stops(StopReason::kFlux)},
                        {"cap", traces.stops(StopReason::kCap)}};
-  if (!r.traces_only) {
+  if (!r.options.traces_only) {
     const ShellCheckResult& checks = r.checks;
     const ShellCounts& c = r.counts;
     j["shell"] = {{"file", files.shell},
-                  {"tets", c.tets},
-                  {"points", c.points},
+                  {"tets", r.mesh.tets.size()},
+                  {"points", r.mesh.points.size()},
                   {"coverage", r.quality.coverage},
                   {"shell_volume", r.quality.shell_volume},
                   {"inverted_tets", checks.inverted_tets},
@@ -319,13 +314,13 @@ std::string report_json(const ShellResult& r, const ReportFiles& files, double r
 }
 
 void write_shell(const std::string& path, const ShellResult& result, int msh_version) {
-  if (result.traces_only)
+  if (result.options.traces_only)
     throw InputError(path + ": the run stopped after the traces (traces_only): no shell to write");
   write_tet_mesh(path, result.mesh, tet_format_from_path(path, msh_version));
 }
 
 void write_inner_surface(const std::string& path, const ShellResult& result) {
-  if (result.traces_only)
+  if (result.options.traces_only)
     throw InputError(path + ": the run stopped after the traces (traces_only): no inner surface");
   write_surface(path, result.inner_surface);
 }

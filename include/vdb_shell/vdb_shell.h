@@ -22,7 +22,6 @@
 #pragma once
 
 #include <cstddef>
-#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -92,10 +91,8 @@ struct ValidityReport {
   double seconds = 0;
 };
 
-/// Counts of the assembled shell.
+/// Counts of the assembled shell (its tets and points: ShellResult::mesh).
 struct ShellCounts {
-  std::size_t tets = 0;  ///< <= 3 * faces
-  std::size_t points = 0;
   std::size_t dropped_degenerate_tets = 0;     ///< tets with a repeated vertex after welding
   std::size_t collapsed_prisms = 0;            ///< prisms whose inner vertices are one point
   std::size_t welded_vertices = 0;             ///< surface vertices sharing an inner vertex
@@ -126,10 +123,9 @@ struct ShellResult {
   SurfaceMesh inner_surface;
   /// The input surface after validation (the outer boundary of the shell).
   SurfaceMesh surface;
-  TraceResult traces;      ///< every vertex's trace, with stop reasons
-  FieldStats field_stats;  ///< voxel size, strategy, active voxels, seconds
-  std::map<std::string, std::string> field_parameters;  ///< as written into .vdb metadata
-  std::shared_ptr<const Fields> fields;                 ///< only with ShellOptions::keep_fields
+  TraceResult traces;                    ///< every vertex's trace, with stop reasons
+  FieldStats field_stats;                ///< voxel size, strategy, active voxels, seconds
+  std::shared_ptr<const Fields> fields;  ///< only with ShellOptions::keep_fields
   ShellCounts counts;
   ShellCheckResult checks;  ///< the final full check (valid())
   ValidityReport validity;
@@ -138,7 +134,6 @@ struct ShellResult {
   /// Every notice of the run, one sentence each: validation's (flipped, triangulated, dropped
   /// vertices) first, then the fields' (interior filled by fast sweeping, ...).
   std::vector<std::string> notices;
-  bool traces_only = false;  ///< built with ShellOptions::traces_only
 };
 
 /// Builds the shell of a validated surface (load_surface(), make_surface()).
