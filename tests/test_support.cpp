@@ -111,15 +111,11 @@ double enclosed_volume6(const SurfaceMesh& s) {
 std::pair<long, long> first_overlap(const TetMesh& shell) {
   const std::size_t count = shell.tets.size();
   if (count < 2) return {-1, -1};
-  Vec3d lo = shell.points[shell.tets[0][0]], hi = lo;
+  BBox box;
   for (const Tet& k : shell.tets)
-    for (std::uint32_t i : k) {
-      const Vec3d& p = shell.points[i];
-      lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
-      hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
-    }
+    for (std::uint32_t i : k) box.expand(shell.points[i]);
+  const Vec3d lo = box.lo, extent = box.extent();
   const int n = std::clamp(static_cast<int>(std::cbrt(static_cast<double>(count))), 1, 64);
-  const Vec3d extent = hi - lo;
   auto cell_of = [&](double x, double l, double e) {
     return e > 0 ? std::clamp(static_cast<int>((x - l) / e * n), 0, n - 1) : 0;
   };
