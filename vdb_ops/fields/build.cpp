@@ -17,7 +17,10 @@
 #include "core/base/timer.h"
 
 namespace vdb_shell {
-namespace fields_detail {
+
+using namespace fields_detail;
+
+namespace {
 
 /// True if some inactive value is negative (the interior is not filled).
 bool has_unfilled_interior(const FloatGrid& grid) {
@@ -36,9 +39,8 @@ FloatGrid::Ptr fill_interior_by_sweeping(const FloatGrid& grid) {
   out->setGridClass(openvdb::GRID_LEVEL_SET);
   return out;
 }
-}  // namespace fields_detail
 
-using namespace fields_detail;
+}  // namespace
 
 Fields::Fields(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 Fields::~Fields() = default;

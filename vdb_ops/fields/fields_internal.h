@@ -71,10 +71,6 @@ void init_openvdb();
 std::string format_double(double v);
 /// "1.23 GiB".
 std::string format_gb(double bytes);
-/// Physical memory of the machine, bytes (0 if unknown).
-double physical_memory_bytes();
-/// Total area of the mesh's triangles, world units squared.
-double surface_area(const SurfaceMesh& mesh);
 /// The name FieldStats::strategy reports for a method.
 const char* method_name(SdfMethod m);
 
@@ -114,10 +110,6 @@ IndexMesh to_index_space(const SurfaceMesh& mesh, const openvdb::math::Transform
 FloatGrid::Ptr mesh_to_volume(const IndexMesh& m, const openvdb::math::Transform& xform, float ex,
                               float in, openvdb::Int32Grid* index_grid = nullptr, int flags = 0);
 
-/// Whether mesh_to_band() voxelizes `m` itself (at least 1000 triangles, none huge) rather than
-/// leaving it to meshToVolume.
-bool band_voxels_apply(const IndexMesh& m);
-
 /// The seed band: meshToVolume(m, xform, ex, in, DISABLE_RENORMALIZATION, index_grid), with its
 /// voxelization by bit rows where band_voxels_apply(); the same result either way. Widths in
 /// voxels, at most 2. `flood_filled`, if given, receives the number of triangles voxelized by a
@@ -141,12 +133,6 @@ void refine_by_neighbours_jacobi(FloatGrid& sdf, const openvdb::Int32Grid& index
 /// Upper bound of the interior depth of a level set, voxels: half the smallest side of the
 /// active bounding box, plus a margin.
 int interior_depth_bound(const FloatGrid& grid);
-
-/// True if some inactive value is negative (the interior is not filled).
-bool has_unfilled_interior(const FloatGrid& grid);
-
-/// Fills the inactive interior of a level set by first-order fast sweeping.
-FloatGrid::Ptr fill_interior_by_sweeping(const FloatGrid& grid);
 
 /// Derives the flux (and, with options.store_gradient, the gradient) of `sdf`, names and
 /// classes the grids, fills the counts, timings (from `t0`) and parameters of `stats`, and

@@ -33,17 +33,23 @@ std::string format_gb(double bytes) {
   return s.str();
 }
 
+namespace {
+
+/// Physical memory of the machine, bytes (0 if unknown).
 double physical_memory_bytes() {
   const long pages = ::sysconf(_SC_PHYS_PAGES);
   const long page = ::sysconf(_SC_PAGE_SIZE);
   return pages > 0 && page > 0 ? double(pages) * double(page) : 0.0;
 }
 
+/// Total area of the mesh's triangles, world units squared.
 double surface_area(const SurfaceMesh& mesh) {
   double area = 0.0;
   for (std::size_t f = 0; f < mesh.num_faces(); ++f) area += 0.5 * norm(face_normal_area(mesh, f));
   return area;
 }
+
+}  // namespace
 
 GradientMap gradient_map(const openvdb::math::Transform& xform) {
   GradientMap out;

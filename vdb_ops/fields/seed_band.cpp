@@ -252,8 +252,6 @@ void band_voxelize_triangle(const IndexMesh& m, std::size_t index, BandVoxels& o
 
 /// True if band_voxels() handles `m`: OpenVDB subdivides the large triangles of meshes with
 /// fewer than 1000 polygons (measuring against the parts), and the boxes must fit.
-}  // namespace
-
 bool band_voxels_apply(const IndexMesh& m) {
   if (m.triangles.size() < 1000) return false;
   for (const openvdb::Vec3I& t : m.triangles) {
@@ -271,8 +269,6 @@ bool band_voxels_apply(const IndexMesh& m) {
   }
   return true;
 }
-
-namespace {
 
 /// meshToVolume's distance and index trees after voxelization (see above), leaf for leaf.
 /// Returns the number of triangles voxelized by the flood fill.
