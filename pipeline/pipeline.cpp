@@ -36,49 +36,28 @@ auto in_arena(int threads, const Body& body) {
   return arena.execute(body);
 }
 
-/// The message of a shell the search could not make valid: bad input when the surface crosses
-/// itself or folds sharper than the thinnest shell, a bug otherwise.
+/// The message of a shell the search could not make valid. make_surface() refused every surface
+/// that is not closed, 2-manifold and free of crossings, and for those a valid shell exists: a
+/// failure is a bug.
 [[noreturn]] void throw_invalid(const LoadedSurface& surface, const ValidShell& valid) {
-  const SurfaceMesh& mesh = surface.mesh;
-  const ShellCheckResult& checks = valid.checks;
-  // A surface that crosses itself bounds no single volume: bad input, not a search failure.
-  const auto crossing = surface_self_intersections(mesh, 1);
-  if (!crossing.empty()) {
-    const std::uint32_t f = crossing[0][0], g = crossing[0][1];
-    const Vec3d& p = mesh.points[mesh.triangles[f][0]];
-    std::ostringstream message;
-    message << surface.source << ": the surface intersects itself (triangles " << f << " and " << g
-            << ", near (" << p.x << ", " << p.y << ", " << p.z
-            << ")), so it bounds no single volume and no valid shell exists; repair it (for a "
-               ".vdb input, a lower --adaptivity); nothing was written";
-    throw InputError(message.str());
-  }
-  if (valid.stalled && !valid.on_surface.empty()) {  // the failure is likely near them
-    const std::uint32_t v = valid.on_surface.front();
-    const Vec3d& p = mesh.points[v];
-    std::ostringstream message;
-    const std::size_t n = valid.on_surface.size();
-    message << surface.source << ": " << n
-            << (n == 1 ? " surface vertex is" : " surface vertices are")
-            << " folded: the incident faces have no common inward direction (first: vertex " << v
-            << " at (" << p.x << ", " << p.y << ", " << p.z
-            << ")); keeping them on the surface did not make the shell valid ("
-            << describe_problems(checks)
-            << "; likely a fold sharper than the thinnest shell); "
-               "remesh the surface around them (for a .vdb input, a lower --adaptivity); nothing "
-               "was written";
-    std::string text = message.str();
+  const auto one_line = [](std::string text) {  // describe_problems(): one line per problem
+    while (!text.empty() && text.back() == '\n') text.pop_back();
     std::replace(text.begin(), text.end(), '\n', ';');
-    throw InputError(text);
+    return text;
+  };
+  std::ostringstream message;
+  message << surface.source << ": could not make the shell valid after " << valid.rounds
+          << " rounds (" << one_line(describe_problems(valid.checks)) << ")";
+  if (!valid.floor_valid)
+    message << "; the thinnest shell is invalid too: " << one_line(valid.floor_problems);
+  if (!valid.on_surface.empty()) {
+    const std::uint32_t v = valid.on_surface.front();
+    const Vec3d& p = surface.mesh.points[v];
+    message << "; " << valid.on_surface.size() << " folded surface vertices (first: vertex " << v
+            << " at (" << p.x << ", " << p.y << ", " << p.z << "))";
   }
-  std::string message =
-      surface.source + ": could not make the shell valid after " + std::to_string(valid.rounds) +
-      " rounds (" + describe_problems(checks) + ")" +
-      (valid.floor_valid ? "" : "; the thinnest shell is invalid too: " + valid.floor_problems) +
-      "; nothing was written — please report this input";
-  while (!message.empty() && message.back() == '\n') message.pop_back();
-  std::replace(message.begin(), message.end(), '\n', ';');
-  throw InternalError(message);
+  message << "; nothing was written — please report this input";
+  throw InternalError(message.str());
 }
 
 /// The inner side as a surface; a vertex kept on the surface is its own inner vertex.

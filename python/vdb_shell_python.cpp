@@ -355,7 +355,8 @@ std::string build_shell_doc() {
            "\n";
   doc +=
       "\nRaises InputError (a ValueError) for arrays of the wrong shape or dtype, a surface that "
-      "is not closed and 2-manifold or has NaN/Inf coordinates or out-of-range indices (the "
+      "is not closed and 2-manifold, crosses itself or has NaN/Inf coordinates or out-of-range "
+      "indices (the "
       "message names the first offending element), unknown options or values out of range; "
       "ResourceError for the memory budget; InternalError for a bug.";
   return doc;

@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "core/base/errors.h"
+#include "core/validity/shell_checks.h"
 
 namespace vdb_shell {
 namespace {
@@ -242,6 +243,20 @@ void check_vertices(const SoupFaces& f, const std::vector<char>& is_degenerate,
   }
 }
 
+/// Pairs of faces whose interiors cross (surface_self_intersections()), each named with a point
+/// of the crossing.
+void check_crossings(const SoupFaces& faces, ProblemCollector& crossing) {
+  SurfaceMesh mesh;
+  mesh.points = faces.soup.points;
+  mesh.triangles.reserve(faces.tris.size());
+  for (const SoupTriangle& t : faces.tris) mesh.triangles.push_back(t.v);
+  for (const auto& [f, g] : surface_self_intersections(mesh, SIZE_MAX))
+    crossing.add(crossing.examples.size() >= crossing.max
+                     ? std::string()
+                     : faces.face_name(faces.tris[f]) + " and " + faces.face_name(faces.tris[g]) +
+                           " cross at " + fmt_point(triangles_crossing_point(mesh, f, g)));
+}
+
 }  // namespace
 
 std::vector<SurfaceProblem> find_surface_problems(const PolygonSoup& soup,
@@ -270,12 +285,24 @@ std::vector<SurfaceProblem> find_surface_problems(const PolygonSoup& soup,
   if (nonmanifold_edge.problem.count == 0)
     check_vertices(faces, is_degenerate, corners, nonmanifold_vertex);
 
+  // Crossings only mean something on an otherwise valid surface (neighbours across an edge are
+  // told apart by the edge), and cost as much as the rest together: last.
+  ProblemCollector crossing("self-intersections (pairs of faces that cross)",
+                            "separate or re-mesh the crossing parts (for a .vdb input, a lower "
+                            "--adaptivity)",
+                            max);
+  if (boundary.problem.count + nonmanifold_edge.problem.count + orientation.problem.count +
+          nonmanifold_vertex.problem.count + degenerate.problem.count + duplicate.problem.count ==
+      0)
+    check_crossings(faces, crossing);
+
   boundary.flush_into(problems);
   nonmanifold_edge.flush_into(problems);
   nonmanifold_vertex.flush_into(problems);
   degenerate.flush_into(problems);
   duplicate.flush_into(problems);
   orientation.flush_into(problems);
+  crossing.flush_into(problems);
   return problems;
 }
 

@@ -3,7 +3,8 @@
 // Every rule of a closed 2-manifold surface is checked and reported by name with its first
 // offending elements (indices, 0-based, and positions): NaN/Inf coordinates, out-of-range indices,
 // polygons with fewer than three corners, degenerate (zero-area) and duplicate faces, boundary
-// edges, non-manifold edges and vertices, inconsistent orientation. Several components are
+// edges, non-manifold edges and vertices, inconsistent orientation, and (on a surface that
+// passes all of those) faces that cross each other. Several components are
 // allowed. A surface whose enclosed volume is negative (normals pointing in) is flipped and a
 // notice says so. Vertices no face uses are dropped with a notice.
 #pragma once

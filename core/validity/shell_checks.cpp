@@ -166,6 +166,39 @@ std::vector<std::array<std::uint32_t, 2>> surface_self_intersections(const Surfa
   return out;
 }
 
+Vec3d triangles_crossing_point(const SurfaceMesh& surface, std::uint32_t f, std::uint32_t g) {
+  const std::array<Vec3d, 3> a = triangle_corners(surface, f);
+  const std::array<Vec3d, 3> b = triangle_corners(surface, g);
+  // Barycentric coordinates of x in the plane of t, all >= -eps: x lies in t.
+  const auto inside = [](const std::array<Vec3d, 3>& t, const Vec3d& x) {
+    const Vec3d n = cross(t[1] - t[0], t[2] - t[0]);
+    const double n2 = norm2(n);
+    if (!(n2 > 0.0)) return false;
+    for (int k = 0; k < 3; ++k)
+      if (dot(cross(t[(k + 1) % 3] - t[k], x - t[k]), n) < -1e-9 * n2) return false;
+    return true;
+  };
+  const auto edge_through = [&](const std::array<Vec3d, 3>& e, const std::array<Vec3d, 3>& t,
+                                Vec3d& x) {
+    const Vec3d n = normalized(cross(t[1] - t[0], t[2] - t[0]));
+    for (int k = 0; k < 3; ++k) {
+      const Vec3d &p = e[k], &q = e[(k + 1) % 3];
+      const double dp = dot(n, p - t[0]), dq = dot(n, q - t[0]);
+      if ((dp > 0) == (dq > 0) || dp == dq) continue;
+      x = p + (q - p) * (dp / (dp - dq));
+      if (inside(t, x)) return true;
+    }
+    return false;
+  };
+  Vec3d x;
+  if (edge_through(a, b, x) || edge_through(b, a, x)) return x;
+  for (const Vec3d& p : a)
+    if (inside(b, p)) return p;
+  for (const Vec3d& p : b)
+    if (inside(a, p)) return p;
+  return ((a[0] + a[1] + a[2]) + (b[0] + b[1] + b[2])) / 6.0;
+}
+
 std::string describe_problems(const ShellCheckResult& r) {
   std::ostringstream s;
   const auto line = [&](std::size_t count, const char* what,

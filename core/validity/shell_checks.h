@@ -156,6 +156,11 @@ class ShellChecker {
 std::vector<std::array<std::uint32_t, 2>> surface_self_intersections(const SurfaceMesh& surface,
                                                                      std::size_t max_listed);
 
+/// A point where surface triangles f and g cross (as surface_self_intersections() lists them):
+/// where an edge of one passes through the other, else (coplanar overlap) a corner of one inside
+/// the other, else the midpoint of their centroids.
+Vec3d triangles_crossing_point(const SurfaceMesh& surface, std::uint32_t f, std::uint32_t g);
+
 /// One line per failed check ("3 inverted tets (first: 12, 40, 41)"); "" when valid.
 std::string describe_problems(const ShellCheckResult& result);
 

@@ -137,13 +137,13 @@ struct ShellResult {
 };
 
 /// Builds the shell of a validated surface (load_surface(), make_surface()).
-/// \throw InputError (bad options; the surface crosses itself; folded vertices the search could
-///        not keep valid), ResourceError, InternalError, CancelledError — see the file comment.
+/// \throw InputError (bad options), ResourceError, InternalError (a shell that could not be made
+///        valid: a bug), CancelledError — see the file comment.
 ShellResult build_shell(const LoadedSurface& surface, const ShellOptions& options,
                         const RunControl& control = {});
 
-/// Validates `mesh` as make_surface() does (closed, 2-manifold, finite, indices in range;
-/// messages name `source`) and builds its shell. Vertices no triangle uses are dropped (a
+/// Validates `mesh` as make_surface() does (closed, 2-manifold, not crossing itself, finite,
+/// indices in range; messages name `source`) and builds its shell. Vertices no triangle uses are dropped (a
 /// notice says so), so the shell's first points are the used vertices in their order.
 ShellResult build_shell(const SurfaceMesh& mesh, const ShellOptions& options,
                         const RunControl& control = {}, const std::string& source = "surface mesh");

@@ -140,6 +140,44 @@ TEST(Validate, DegenerateAndDuplicateFaces) {
   EXPECT_TRUE(duplicate);
 }
 
+/// cube_obj() and a second unit cube at `corner`, as one OBJ.
+std::string two_cubes_obj(const Vec3d& corner) {
+  std::string s = cube_obj();
+  for (int i = 0; i < 8; ++i) {
+    const Vec3d p = corner + Vec3d{double(i == 1 || i == 2 || i == 5 || i == 6),
+                                   double(i == 2 || i == 3 || i == 6 || i == 7), double(i >= 4)};
+    s += "v " + std::to_string(p.x) + " " + std::to_string(p.y) + " " + std::to_string(p.z) + "\n";
+  }
+  for (const char* f : kCubeFaces) {
+    int a = 0, b = 0, c = 0;
+    std::sscanf(f, "f %d %d %d", &a, &b, &c);
+    s += "f " + std::to_string(a + 8) + " " + std::to_string(b + 8) + " " + std::to_string(c + 8) +
+         "\n";
+  }
+  return s;
+}
+
+TEST(Validate, CrossingSurfaceIsRefusedNamingFacesAndAPoint) {
+  // Two unit cubes, the second at (0.5, 0.25, 0.25): closed, consistently oriented and manifold,
+  // but the parts cross.
+  const std::string e = load_error("crossing.obj", two_cubes_obj({0.5, 0.25, 0.25}));
+  EXPECT_TRUE(contains(e, "crossing.obj: not a closed 2-manifold")) << e;
+  EXPECT_TRUE(contains(e, "self-intersections (pairs of faces that cross)")) << e;
+  // The first listed point lies on both cubes' surfaces: on a face plane of each (coordinates
+  // 0 or 1 for the first; 0.5 or 1.5, 0.25 or 1.25 for the second).
+  const std::size_t at = e.find(" cross at (");
+  ASSERT_NE(at, std::string::npos) << e;
+  double x = 0, y = 0, z = 0;
+  ASSERT_EQ(std::sscanf(e.c_str() + at, " cross at (%lf, %lf, %lf)", &x, &y, &z), 3) << e;
+  const auto on = [](double v, double a) {
+    return std::abs(v - a) < 1e-9 || std::abs(v - a - 1) < 1e-9;
+  };
+  EXPECT_TRUE(on(x, 0) || on(y, 0) || on(z, 0)) << e;
+  EXPECT_TRUE(on(x, 0.5) || on(y, 0.25) || on(z, 0.25)) << e;
+  // Side by side, touching along the plane x = 1, they load.
+  EXPECT_EQ(load_error("touching.obj", two_cubes_obj({1, 0.25, 0.25})), "");
+}
+
 TEST(Validate, InwardSurfaceIsFlippedWithNotice) {
   PolygonSoup soup;
   soup.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
