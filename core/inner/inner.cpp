@@ -49,6 +49,7 @@ InnerVertices place_inner_vertices(const SurfaceMesh& mesh, const TraceResult& t
   }
 
   InnerVertices out;
+  out.limit = limit;
   out.arc.resize(n);
   std::vector<Vec3d> ends(n);
   for (std::size_t v = 0; v < n; ++v) {
@@ -85,7 +86,9 @@ InnerVertices place_inner_vertices(const SurfaceMesh& mesh, const TraceResult& t
             if (it == reps.end()) continue;
             for (const std::uint32_t u : it->second) {
               if (u >= best) break;
-              if (norm2(ends[u] - ends[v]) <= tol2) {
+              // Within the weld distance, and not carrying v past its thickness limit.
+              if (norm2(ends[u] - ends[v]) <= tol2 &&
+                  distance(ends[u], mesh.points[v]) <= limit[v]) {
                 best = u;
                 break;
               }

@@ -6,9 +6,11 @@
 // (the limits that are set), interpolated between samples — thickness is measured along the
 // trace. Trace ends (not points a limit placed mid-trace: welding could carry them past the
 // limit) that meet are then welded: in vertex order, each point joins the first
-// earlier representative within the weld tolerance, or becomes a representative itself (no
-// chains: a welded group never spans more than the tolerance from its representative). The
-// representative keeps its own position, so every inner vertex lies on a trace.
+// earlier representative within the weld tolerance whose position is within the point's own
+// limit (straight-line distance from its surface vertex: the thickness the shell shows), or
+// becomes a representative itself (no chains: a welded group never spans more than the
+// tolerance from its representative). The representative keeps its own position, so every
+// inner vertex lies on a trace.
 #pragma once
 
 #include <cstddef>
@@ -47,6 +49,9 @@ struct ThicknessOptions {
 struct InnerVertices {
   ShellInput input;         ///< inner points and the inner vertex of each surface vertex
   std::vector<double> arc;  ///< per surface vertex: arc length at its inner point
+  /// Per surface vertex: the largest distance its inner vertex may have from it (the thickness
+  /// limits; infinity: none). Every inner point placed here, welded or not, is within it.
+  std::vector<double> limit;
   std::size_t limited = 0;  ///< vertices whose thickness a limit shortened
   std::size_t welded = 0;   ///< surface vertices sharing another's inner vertex
 };

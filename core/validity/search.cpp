@@ -86,8 +86,10 @@ class ShellSearch {
       for (std::uint32_t v : surface.triangles[f])
         face_normals[v].push_back(normalized(face_normal_area(surface, f)));
     correction_.assign(n, Vec3d{});
+    limit_ = start.limit;
+    limit_.resize(n, std::numeric_limits<double>::infinity());
     for (std::size_t v = 0; v < n; ++v) {
-      floor_[v] *= options.floor_fraction;
+      floor_[v] = std::min(floor_[v] * options.floor_fraction, 0.5 * limit_[v]);
       full_[v] = std::max(start.arc[v], floor_[v]);
       // Beyond the trace's end (only for traces shorter than the floor): continue straight
       // along its first step, or inward along the vertex normal for a trace that never moved.
@@ -356,11 +358,16 @@ class ShellSearch {
     return cached_position_[v];
   }
 
+  /// The point at arc length t along v's trace (bent at its start, continued straight past its
+  /// end), pulled towards v where the bend would carry it past v's thickness limit.
   Vec3d position(std::size_t v, double t) const {
     const double end = traces_.end_arc(v);
     const Vec3d bend = correction_[v] * std::min(t, floor_[v]);
-    if (t <= end) return point_at_arc(traces_, v, t) + bend;
-    return traces_.end_point(v) + fallback_[v] * (t - end) + bend;
+    const Vec3d p = t <= end ? point_at_arc(traces_, v, t) + bend
+                             : traces_.end_point(v) + fallback_[v] * (t - end) + bend;
+    const Vec3d& s = surface_.points[v];
+    const double d = distance(p, s);
+    return d > limit_[v] ? s + (p - s) * (limit_[v] / d) : p;
   }
 
   /// Inner vertices of `s` (slots in order of their smallest member) and each slot's members.
@@ -400,6 +407,7 @@ class ShellSearch {
   const InnerVertices& start_;
   const StageMonitor& monitor_;  ///< checked every 1024 prisms of the serial loops
   std::vector<double> full_, floor_;
+  std::vector<double> limit_;  ///< per vertex: InnerVertices::limit (infinity: none)
   std::vector<Vec3d> fallback_, correction_;
   IndexLists groups_;                     ///< start weld group -> its vertices
   std::vector<std::uint32_t> group_key_;  ///< per group: its smallest welded vertex (initial)

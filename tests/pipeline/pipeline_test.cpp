@@ -150,36 +150,67 @@ TEST(Pipeline, ThicknessLimitHolds) {
   for (const Vec3d& p : r.inner_surface.points) EXPECT_GE(norm(p), 0.4 - 1e-9);
 }
 
+/// The largest ratio, over every corner of every face, of the distance from the surface vertex
+/// to its inner vertex (r.inner_surface) to `limit(v)`.
+template <class Limit>
+double largest_thickness_ratio(const ShellResult& r, const Limit& limit) {
+  const SurfaceMesh& outer = r.surface;
+  const SurfaceMesh& inner = r.inner_surface;
+  EXPECT_EQ(outer.triangles.size(), inner.triangles.size());
+  double worst = 0;
+  for (std::size_t f = 0; f < outer.triangles.size(); ++f) {
+    const Triangle& a = outer.triangles[f];
+    const Triangle& i = inner.triangles[f];  // the inner copy runs reversed: (a, c, b)
+    const std::uint32_t corner_to_inner[3] = {i[0], i[2], i[1]};
+    for (int c = 0; c < 3; ++c)
+      worst = std::max(
+          worst, distance(outer.points[a[c]], inner.points[corner_to_inner[c]]) / limit(a[c]));
+  }
+  return worst;
+}
+
+/// Per vertex of `mesh`: the mean length of its incident edges.
+std::vector<double> mean_incident_edge(const SurfaceMesh& mesh) {
+  std::vector<double> sum(mesh.points.size(), 0.0);
+  std::vector<int> count(mesh.points.size(), 0);
+  for (const Triangle& t : mesh.triangles)
+    for (int c = 0; c < 3; ++c) {
+      const double l = distance(mesh.points[t[c]], mesh.points[t[(c + 1) % 3]]);
+      sum[t[c]] += l, sum[t[(c + 1) % 3]] += l;
+      ++count[t[c]], ++count[t[(c + 1) % 3]];
+    }
+  for (std::size_t v = 0; v < sum.size(); ++v) sum[v] /= std::max(count[v], 1);
+  return sum;
+}
+
+TEST(Pipeline, ThicknessLimitsHoldOnAFineMesh) {
+  // A sphere finer than the grid, limited at its radius: traces end around the limit and their
+  // ends weld at the centre, where a weld must not carry a vertex past its limit.
+  const SurfaceMesh sphere = make_shape("sphere", 2);
+  ShellOptions o = at_resolution(48);
+  o.thickness.max_thickness = 0.5;
+  ShellResult r = build_shell(sphere, o);
+  const double ratio = largest_thickness_ratio(r, [&](std::uint32_t) { return 0.5; });
+  EXPECT_LE(ratio, 1 + 1e-12);
+  EXPECT_GT(ratio, 0.8);  // within one step back (0.85) of the limit
+  o.thickness.max_thickness = 0;
+  o.thickness.edge_factor = 5;
+  r = build_shell(sphere, o);
+  const std::vector<double> edge = mean_incident_edge(r.surface);
+  EXPECT_GT(r.counts.thickness_limited_vertices, 1000u);
+  EXPECT_LE(largest_thickness_ratio(r, [&](std::uint32_t v) { return 5 * edge[v]; }), 1 + 1e-12);
+}
+
 TEST(Pipeline, EdgeFactorThicknessLimitHolds) {
   // Paper Fig. 12: thickness at most K times the mean length of the vertex's incident edges.
   const double k = 0.5;
   ShellOptions o;
   o.thickness.edge_factor = k;
   const ShellResult r = shell_of_shape("horn", o);
-  const SurfaceMesh& outer = r.surface;
-  const SurfaceMesh& inner = r.inner_surface;
-  ASSERT_EQ(outer.triangles.size(), inner.triangles.size());
-  std::vector<double> sum(outer.points.size(), 0.0);
-  std::vector<int> count(outer.points.size(), 0);
-  for (const Triangle& t : outer.triangles)
-    for (int c = 0; c < 3; ++c) {
-      const double l = distance(outer.points[t[c]], outer.points[t[(c + 1) % 3]]);
-      sum[t[c]] += l, sum[t[(c + 1) % 3]] += l;
-      ++count[t[c]], ++count[t[(c + 1) % 3]];
-    }
-  int checked = 0;
-  for (std::size_t f = 0; f < outer.triangles.size(); ++f) {
-    const Triangle& a = outer.triangles[f];
-    const Triangle& i = inner.triangles[f];  // the inner copy runs reversed: (a, c, b)
-    const std::uint32_t corner_to_inner[3] = {i[0], i[2], i[1]};
-    for (int c = 0; c < 3; ++c) {
-      const double limit = k * sum[a[c]] / count[a[c]];
-      // The straight distance never exceeds the arc length the limit applies to.
-      EXPECT_LE(distance(outer.points[a[c]], inner.points[corner_to_inner[c]]), limit + 1e-9);
-      ++checked;
-    }
-  }
-  EXPECT_EQ(checked, 3 * 408);
+  const std::vector<double> edge = mean_incident_edge(r.surface);
+  EXPECT_GT(r.counts.thickness_limited_vertices, 100u);
+  // The straight distance never exceeds the arc length the limit applies to.
+  EXPECT_LE(largest_thickness_ratio(r, [&](std::uint32_t v) { return k * edge[v]; }), 1 + 1e-12);
 }
 
 TEST(Pipeline, VdbInputRoundTrip) {
