@@ -22,6 +22,7 @@
 #include <sstream>
 #include <tuple>
 
+#include "assets/flap.h"
 #include "core/base/errors.h"
 
 namespace vdb_shell {
@@ -589,6 +590,8 @@ const std::vector<ShapeEntry>& registry() {
       {{"horn", "curved cone tapering to a sharp tip along a 100-degree arc", 408}, make_horn},
       {{"pointy", "cylindrical body (radius 0.45) with a sharp concave spike", 96}, make_pointy},
       {{"propeller", "hub (radius 0.1) with 3 twisted blades to radius 0.5", 1200}, make_propeller},
+      {{"flap", "domed box with two thin flaps lifted off its top: a folded vertex", 52},
+       make_flap},
   };
   return entries;
 }

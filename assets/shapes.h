@@ -30,6 +30,9 @@
 //                    concave spike (base radius 0.2) up to a sharp tip at z = 0.5
 //   propeller   0    hub (radius 0.1, z in [-0.15, 0.15]) with 3 twisted        1200 N^2
 //                    blades (pitch 40 to 20 degrees) reaching radius 0.5
+//   flap        0    box with its top domed and two thin flaps (5.7 degrees)    48 N^2 + 4
+//                    lifted off the top's centre: the centre's fan normals fit
+//                    in no hemisphere (flap.h)
 //
 // The counts at detail 1 are the paper's Table 1 numbers (box 48, cylinder 48, pointy 96, horn
 // 408, tube 512, sphere 760, funnel 1280, propeller 1200) or within 5% of them (star 560 for 588,

@@ -14,6 +14,8 @@
 #include <utility>
 
 #include "core/base/timer.h"
+#include "core/inner/sectors.h"
+#include "core/validity/sector_shell.h"
 #include "core/write/shell_writers.h"
 #include "core/write/trace_writer.h"
 #include "vdb_ops/point_index_vdb.h"
@@ -39,7 +41,8 @@ auto in_arena(int threads, const Body& body) {
 /// The message of a shell the search could not make valid. make_surface() refused every surface
 /// that is not closed, 2-manifold and free of crossings, and for those a valid shell exists: a
 /// failure is a bug.
-[[noreturn]] void throw_invalid(const LoadedSurface& surface, const ValidShell& valid) {
+[[noreturn]] void throw_invalid(const LoadedSurface& surface, const SectorSplit& split,
+                                const ValidShell& valid) {
   const auto one_line = [](std::string text) {  // describe_problems(): one line per problem
     while (!text.empty() && text.back() == '\n') text.pop_back();
     std::replace(text.begin(), text.end(), '\n', ';');
@@ -50,11 +53,19 @@ auto in_arena(int threads, const Body& body) {
           << " rounds (" << one_line(describe_problems(valid.checks)) << ")";
   if (!valid.floor_valid)
     message << "; the thinnest shell is invalid too: " << one_line(valid.floor_problems);
-  if (!valid.on_surface.empty()) {
-    const std::uint32_t v = valid.on_surface.front();
+  if (!split.empty()) {
+    const std::uint32_t v = split.folded.front();
     const Vec3d& p = surface.mesh.points[v];
-    message << "; " << valid.on_surface.size() << " folded surface vertices (first: vertex " << v
-            << " at (" << p.x << ", " << p.y << ", " << p.z << "))";
+    message << "; " << split.folded.size() << " folded surface vertices split into "
+            << split.sectors << " sectors (first: vertex " << v << " at (" << p.x << ", " << p.y
+            << ", " << p.z << "))";
+  }
+  if (!valid.on_surface.empty()) {
+    const std::uint32_t u = valid.on_surface.front(), v = split.empty() ? u : split.vertex[u];
+    const Vec3d& p = surface.mesh.points[v];
+    message << "; " << valid.on_surface.size()
+            << " surface vertices kept on the surface (first: vertex " << v << " at (" << p.x
+            << ", " << p.y << ", " << p.z << "))";
   }
   message << "; nothing was written — please report this input";
   throw InternalError(message.str());
@@ -87,6 +98,8 @@ ShellResult run(const LoadedSurface& surface, const ShellOptions& options,
   r.notices = surface.notices;
 
   std::shared_ptr<const Fields> fields;
+  SectorSplit split;
+  TraceResult split_traces;
   {
     const auto t0 = Clock::now();
     StageMonitor monitor(control, "fields");
@@ -111,6 +124,12 @@ ShellResult run(const LoadedSurface& surface, const ShellOptions& options,
     StageMonitor monitor(control, "trace");
     ActiveStage active(monitor);
     r.traces = trace_paths(mesh, *fields, options.trace, make_vdb_point_index, monitor);
+    // Folded vertices: their fans split into sectors, each traced from the vertex along its
+    // own inward direction (core/inner/sectors.h).
+    split = split_folded_vertices(mesh);
+    if (!split.empty())
+      split_traces = retrace_split(r.traces, split.surface, split.vertex, split.direction, *fields,
+                                   options.trace);
     monitor.finish();
     r.timings.trace = seconds_since(t0);
   }
@@ -120,11 +139,15 @@ ShellResult run(const LoadedSurface& surface, const ShellOptions& options,
     return r;
   }
 
+  // The shell is built on the split surface (the input where nothing is folded).
+  const SurfaceMesh& work = split.empty() ? mesh : split.surface;
+  const TraceResult& work_traces = split.empty() ? r.traces : split_traces;
   InnerVertices inner;
   {
     const auto t0 = Clock::now();
     StageMonitor monitor(control, "inner");
-    inner = place_inner_vertices(mesh, r.traces, options.thickness);
+    inner = place_inner_vertices(work, work_traces, options.thickness);
+    inner.constraints = split.constraints;
     monitor.finish();
     r.timings.inner = seconds_since(t0);
   }
@@ -132,10 +155,14 @@ ShellResult run(const LoadedSurface& surface, const ShellOptions& options,
     const auto t0 = Clock::now();
     StageMonitor monitor(control, "validity");
     ActiveStage active(monitor);
-    ValidShell valid = make_valid_shell(mesh, r.traces, inner, options.validity, monitor);
+    ValidShell valid = make_valid_shell(work, work_traces, inner, options.validity, monitor);
+    if (valid.checks.valid() && !split.empty()) {
+      const SectorShell sectors = join_sectors(mesh, split, valid);
+      r.validity.gap_tets = sectors.gap_tets;
+    }
     r.quality = summarize_quality(mesh, valid.shell.mesh);
     r.timings.validity = seconds_since(t0);
-    if (!valid.checks.valid()) throw_invalid(surface, valid);
+    if (!valid.checks.valid()) throw_invalid(surface, split, valid);
     monitor.finish();
     r.timings.check = valid.checks.seconds;
 
@@ -149,13 +176,15 @@ ShellResult run(const LoadedSurface& surface, const ShellOptions& options,
     r.validity.moved_back_vertices = valid.moved_back;
     r.validity.moved_back_mean_fraction = valid.moved_back_mean;
     r.validity.unwelded_vertices = valid.unwelded;
+    r.validity.folded_vertices = split.folded.size();
+    r.validity.sectors = split.sectors;
     r.validity.on_surface_vertices = valid.on_surface.size();
     r.validity.cap_faces = valid.cap_faces;
     r.validity.floor_drops = valid.floor_drops;
     r.validity.floor_valid = valid.floor_valid;
     r.validity.seconds = valid.seconds;
     r.checks = std::move(valid.checks);
-    r.inner_surface = inner_surface_of(mesh, valid.input);
+    r.inner_surface = inner_surface_of(work, valid.input);
     r.mesh = std::move(valid.shell.mesh);
   }
   r.timings.total = seconds_since(t_total);
@@ -271,6 +300,9 @@ std::string report_json(const ShellResult& r, const ReportFiles& files, double r
                      {"moved_back_vertices", v.moved_back_vertices},
                      {"moved_back_mean_fraction", v.moved_back_mean_fraction},
                      {"unwelded_vertices", v.unwelded_vertices},
+                     {"folded_vertices", v.folded_vertices},
+                     {"sectors", v.sectors},
+                     {"gap_tets", v.gap_tets},
                      {"on_surface_vertices", v.on_surface_vertices},
                      {"cap_faces", v.cap_faces},
                      {"floor_drops", v.floor_drops},

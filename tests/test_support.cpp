@@ -171,7 +171,8 @@ double nearest_vertex_distance(const SurfaceMesh& s, const Vec3d& p) {
 
 }  // namespace
 
-std::string independent_shell_problems(const SurfaceMesh& surface, const TetMesh& shell) {
+std::string independent_shell_problems(const SurfaceMesh& surface, const TetMesh& shell,
+                                       std::size_t extra_tets) {
   auto same_cycle = [](const std::array<std::uint32_t, 3>& a, const Triangle& b) {
     for (int r = 0; r < 3; ++r)
       if (a[r] == b[0] && a[(r + 1) % 3] == b[1] && a[(r + 2) % 3] == b[2]) return true;
@@ -186,8 +187,9 @@ std::string independent_shell_problems(const SurfaceMesh& surface, const TetMesh
       problem << "surface point " << v << " moved";
       return problem.str();
     }
-  if (shell.tets.size() > 3 * surface.triangles.size())
-    return "T > 3F: " + std::to_string(shell.tets.size()) + " tets";
+  if (shell.tets.size() > 3 * surface.triangles.size() + extra_tets)
+    return "T > 3F + " + std::to_string(extra_tets) + ": " + std::to_string(shell.tets.size()) +
+           " tets";
   // Faces of the tets, as sorted triples -> (count, an oriented copy).
   std::map<std::array<std::uint32_t, 3>, std::pair<int, std::array<std::uint32_t, 3>>> faces;
   for (std::size_t t = 0; t < shell.tets.size(); ++t) {

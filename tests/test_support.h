@@ -50,13 +50,15 @@ std::string read_text(const std::string& path);
 void write_text(const std::string& path, const std::string& text);
 
 /// Checks a shell against its surface with computations of its own (none of core/'s checks):
-/// the surface's points come first, unchanged; T <= 3F; every tet's signed volume is positive;
+/// the surface's points come first, unchanged; T <= 3F + extra_tets (the gap tets of folded
+/// vertices' sectors); every tet's signed volume is positive;
 /// every surface triangle is the outward face of exactly one tet; no face is shared by more than
 /// two tets, and two tets sharing a face lie on opposite sides of it; no two tets overlap (the
 /// centroid of each tet and the midpoints between it and the corners lie strictly inside no
 /// other tet); every other point lies inside the surface (winding number > 1/2) or on it.
 /// Returns "" or the first problem found.
-std::string independent_shell_problems(const SurfaceMesh& surface, const TetMesh& shell);
+std::string independent_shell_problems(const SurfaceMesh& surface, const TetMesh& shell,
+                                       std::size_t extra_tets = 0);
 
 /// Shell volume / enclosed volume, both computed here: the sum of the tets' signed volumes over
 /// the volume the surface's triangles enclose (divergence theorem). 0 for an empty surface.

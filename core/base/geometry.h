@@ -1,8 +1,10 @@
-// geometry.h — distances between points and triangles, for the checks (core/validity) and the
+// geometry.h — distances and solid angles of triangles, for the checks (core/validity), the
+// sectors of folded vertices (core/inner) and the
 // fields' refinement (vdb_ops/fields).
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 
 #include "core/base/vec3.h"
 
@@ -32,6 +34,17 @@ inline double point_triangle_distance2(const Vec3d& p, const Vec3d& a, const Vec
   if (!(denom != 0.0)) return std::min({norm2(ap), norm2(bp), norm2(cp)});
   const double v = vb / denom, w = vc / denom;
   return norm2(ap - ab * v - ac * w);
+}
+
+/// Solid angle of triangle (a, b, c) seen from p, signed: positive when (a, b, c) is
+/// counter-clockwise seen from p (Van Oosterom and Strackee 1983). Over a closed outward surface
+/// the sum is 4 pi at inside points, 0 outside.
+inline double solid_angle(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  const Vec3d x = a - p, y = b - p, z = c - p;
+  const double lx = norm(x), ly = norm(y), lz = norm(z);
+  const double num = dot(x, cross(y, z));
+  const double den = lx * ly * lz + dot(x, y) * lz + dot(y, z) * lx + dot(z, x) * ly;
+  return 2.0 * std::atan2(num, den);
 }
 
 }  // namespace vdb_shell

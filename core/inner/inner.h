@@ -52,6 +52,9 @@ struct InnerVertices {
   /// Per surface vertex: the largest distance its inner vertex may have from it (the thickness
   /// limits; infinity: none). Every inner point placed here, welded or not, is within it.
   std::vector<double> limit;
+  /// Per surface vertex (or empty): what its inner direction must satisfy beyond pointing
+  /// inward for its faces, as normals n with -n.d > 0 (SectorSplit::constraints).
+  std::vector<std::vector<Vec3d>> constraints;
   std::size_t limited = 0;  ///< vertices whose thickness a limit shortened
   std::size_t welded = 0;   ///< surface vertices sharing another's inner vertex
 };

@@ -360,6 +360,58 @@ std::vector<std::uint8_t> classify_vertices(const SurfaceMesh& mesh, double plan
   return planar;
 }
 
+TraceResult retrace_split(const TraceResult& traces, const SurfaceMesh& surface,
+                          const std::vector<std::uint32_t>& source,
+                          const std::vector<Vec3d>& first_direction, const FieldSampler& fields,
+                          const TraceOptions& options) {
+  const std::size_t n = surface.points.size();
+  TraceResult r;
+  r.parameters = traces.parameters;
+  r.planar = classify_vertices(surface, options.planar_angle);
+  std::vector<OneTrace> fresh(n);
+  const std::unique_ptr<FieldProbe> probe = fields.probe();
+  for (std::size_t u = 0; u < n; ++u) {
+    if (norm2(first_direction[u]) == 0) continue;
+    const Vec3d p = surface.points[u];
+    OneTrace& t = fresh[u];
+    trace_one(*probe, p + first_direction[u] * r.parameters.step, r.planar[u] != 0, options,
+              r.parameters, t);
+    t.samples.insert(t.samples.begin(), p);
+    for (double& a : t.arc) a += r.parameters.step;
+    t.arc.insert(t.arc.begin(), 0.0);
+  }
+  r.offsets.assign(n + 1, 0);
+  for (std::size_t u = 0; u < n; ++u)
+    r.offsets[u + 1] = r.offsets[u] + static_cast<std::uint32_t>(fresh[u].samples.empty()
+                                                                     ? traces.num_samples(source[u])
+                                                                     : fresh[u].samples.size());
+  r.samples.reserve(r.offsets[n]);
+  r.arc_length.reserve(r.offsets[n]);
+  r.end.resize(n);
+  r.stop.resize(n);
+  r.merged_with.assign(n, -1);
+  for (std::size_t u = 0; u < n; ++u) {
+    if (fresh[u].samples.empty()) {
+      const std::uint32_t s = source[u];
+      const auto first = traces.offsets[s], last = traces.offsets[s + 1];
+      r.samples.insert(r.samples.end(), traces.samples.begin() + first,
+                       traces.samples.begin() + last);
+      r.arc_length.insert(r.arc_length.end(), traces.arc_length.begin() + first,
+                          traces.arc_length.begin() + last);
+      r.end[u] = traces.end[s];
+      r.stop[u] = traces.stop[s];
+      r.merged_with[u] = traces.merged_with[s];
+    } else {
+      r.samples.insert(r.samples.end(), fresh[u].samples.begin(), fresh[u].samples.end());
+      r.arc_length.insert(r.arc_length.end(), fresh[u].arc.begin(), fresh[u].arc.end());
+      r.end[u] = static_cast<std::uint32_t>(fresh[u].samples.size() - 1);
+      r.stop[u] = fresh[u].stop;
+    }
+  }
+  for (StopReason s : r.stop) ++r.stop_count[static_cast<std::size_t>(s)];
+  return r;
+}
+
 TraceResult trace_paths(const SurfaceMesh& mesh, const FieldSampler& fields,
                         const TraceOptions& options, const PointIndexFactory& make_index,
                         const StageMonitor& monitor) {

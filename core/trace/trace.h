@@ -101,4 +101,14 @@ TraceResult trace_paths(const SurfaceMesh& mesh, const FieldSampler& fields,
                         const PointIndexFactory& make_index = make_hash_point_index,
                         const StageMonitor& monitor = StageMonitor());
 
+/// The traces of a surface made from the traced one by splitting vertices (sectors.h): point u
+/// takes trace source[u] of `traces` when first_direction[u] is zero; otherwise it gets a trace
+/// of its own from its position, one straight step along first_direction[u] (a unit vector),
+/// then through `fields` as trace_paths() traces (planar when u's faces in `surface` are), with
+/// no merges. Parameters are those of `traces`, stop counts those of the result.
+TraceResult retrace_split(const TraceResult& traces, const SurfaceMesh& surface,
+                          const std::vector<std::uint32_t>& source,
+                          const std::vector<Vec3d>& first_direction, const FieldSampler& fields,
+                          const TraceOptions& options);
+
 }  // namespace vdb_shell

@@ -10,15 +10,6 @@
 namespace vdb_shell {
 namespace {
 
-// Solid angle of triangle (a, b, c) seen from p, signed (Van Oosterom and Strackee 1983).
-double solid_angle(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
-  const Vec3d x = a - p, y = b - p, z = c - p;
-  const double lx = norm(x), ly = norm(y), lz = norm(z);
-  const double num = dot(x, cross(y, z));
-  const double den = lx * ly * lz + dot(x, y) * lz + dot(y, z) * lx + dot(z, x) * ly;
-  return 2.0 * std::atan2(num, den);
-}
-
 // A ray from `p` towards +axis; (u, v) are the two other coordinates; eps in world units.
 struct Ray {
   int axis, u, v;

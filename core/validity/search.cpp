@@ -11,35 +11,10 @@
 #include "core/assemble/quality.h"
 #include "core/base/index_lists.h"
 #include "core/base/timer.h"
+#include "core/inner/sectors.h"
 
 namespace vdb_shell {
 namespace {
-
-/// Smallest -n.d over the unit face normals `normals` (> 0: d points inward for every face).
-double inward_margin(const std::vector<Vec3d>& normals, const Vec3d& d) {
-  double m = std::numeric_limits<double>::infinity();
-  for (const Vec3d& nf : normals) m = std::min(m, -dot(nf, d));
-  return m;
-}
-
-/// The unit direction that (approximately) maximises inward_margin, by projected subgradient
-/// steps from `start`; deterministic.
-Vec3d most_inward_direction(const std::vector<Vec3d>& normals, Vec3d start) {
-  Vec3d d = normalized(start), best = d;
-  double best_margin = inward_margin(normals, d);
-  for (int k = 0; k < 200 && !normals.empty(); ++k) {
-    const Vec3d* worst = &normals[0];
-    for (const Vec3d& nf : normals)
-      if (-dot(nf, d) < -dot(*worst, d)) worst = &nf;
-    d = normalized(d - *worst * (0.5 / (k + 1.0)));
-    const double m = inward_margin(normals, d);
-    if (m > best_margin) {
-      best_margin = m;
-      best = d;
-    }
-  }
-  return best;
-}
 
 /// First directions with a smaller inward margin (sine of the angle to the nearest incident
 /// face plane) are bent towards the most inward direction.
@@ -85,6 +60,9 @@ class ShellSearch {
     for (std::size_t f = 0; f < surface.triangles.size(); ++f)
       for (std::uint32_t v : surface.triangles[f])
         face_normals[v].push_back(normalized(face_normal_area(surface, f)));
+    for (std::size_t v = 0; v < start.constraints.size(); ++v)
+      face_normals[v].insert(face_normals[v].end(), start.constraints[v].begin(),
+                             start.constraints[v].end());
     correction_.assign(n, Vec3d{});
     limit_ = start.limit;
     limit_.resize(n, std::numeric_limits<double>::infinity());
@@ -101,9 +79,12 @@ class ShellSearch {
       const Vec3d first = fallback_[v];
       const double margin = inward_margin(face_normals[v], first);
       if (margin >= kMinMargin) continue;
-      const Vec3d safe = most_inward_direction(face_normals[v], -normalized(normal[v]));
-      if (inward_margin(face_normals[v], safe) > margin) correction_[v] = safe - first;
-      if (std::max(margin, inward_margin(face_normals[v], safe)) <= 0.0)
+      const Vec3d safe = most_inward_direction(face_normals[v]);
+      const double safe_margin = norm2(safe) > 0 ? inward_margin(face_normals[v], safe) : 0.0;
+      if (safe_margin > margin) correction_[v] = safe - first;
+      // A sector (start.constraints) needs less than a vertex (sectors.h).
+      const bool sector = v < start.constraints.size() && !start.constraints[v].empty();
+      if (std::max(margin, safe_margin) < (sector ? kSectorMargin : kFoldMargin))
         folded_.push_back(static_cast<std::uint32_t>(v));
     }
     // Folded vertices stay on the surface. A face with three folded corners keeps a prism as one

@@ -18,8 +18,10 @@
 // floor t_min_v > 0 (or undoes a weld), and every round takes at least one step, so there are
 // finitely many steps and rounds. The floor configuration
 // (every vertex at t_min_v, no welds) is a thin offset along each trace's first, inward
-// direction, bent where needed to point inward for every incident face, so it is valid (a
-// folded vertex, with no such direction, stays on the surface: t_v = 0 throughout); an
+// direction, bent where needed to point inward for every incident face (and the extra
+// constraints of InnerVertices::constraints: a sector's, core/inner/sectors.h), so it is valid
+// (a folded vertex, with no such direction, stays on the surface: t_v = 0 throughout; the
+// pipeline splits folded vertices into sectors first, leaving only those with no split); an
 // offending element whose vertices are all at the floor is an element of that configuration,
 // which is impossible. So an offending element always has a vertex above its floor, and the
 // loop ends with no offending element. The floor is "thin enough" only to first order: should a
@@ -72,8 +74,9 @@ struct ValidShell {
   bool floor_valid = true;     ///< false: the search stalled and the floor failed too
   std::string floor_problems;  ///< what the floor configuration broke, when it did
   /// Folded surface vertices kept on the surface (inner_id kOnSurface, depth 0): their incident
-  /// face normals fit in no open hemisphere, and every prism constrains each of its corners'
-  /// inner directions against its face normal, so no thin shell has an inner vertex there. Their
+  /// face normals leave no inward direction with a margin of kFoldMargin (kSectorMargin for a
+  /// sector), and every prism constrains each of its corners' inner directions against its face
+  /// normal, so no thin shell has an inner vertex there. Their
   /// prisms become pyramids, which the same first-order argument allows (docs/validity.md).
   std::vector<std::uint32_t> on_surface;
   /// Faces whose three corners are folded: their prism is one tet to a cap point at the floor

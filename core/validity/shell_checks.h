@@ -55,6 +55,9 @@ struct ShellCheckOptions {
   bool check_overlaps = true;
   /// Run the leak test (surface triangles crossing tets, centroids outside).
   bool check_leaks = true;
+  /// Tets allowed beyond 3 per surface triangle (the gaps between sectors of folded vertices,
+  /// sector_shell.h).
+  std::size_t extra_tets = 0;
   /// How many offending elements each list in the result keeps (lowest indices first);
   /// std::numeric_limits<std::size_t>::max() lists all of them.
   std::size_t max_listed = 5;
@@ -95,7 +98,7 @@ struct ShellCheckResult {
   std::size_t leaking_tets = 0;  ///< tets crossed by a surface triangle or centroid outside
   std::vector<std::uint32_t> first_leaking_tets;
 
-  bool too_many_tets = false;  ///< T > 3F
+  bool too_many_tets = false;  ///< T > 3F + ShellCheckOptions::extra_tets
 
   double seconds = 0.0;  ///< wall time of check_shell()
 

@@ -84,7 +84,10 @@ struct ValidityReport {
   std::size_t moved_back_vertices = 0;
   double moved_back_mean_fraction = 0;
   std::size_t unwelded_vertices = 0;
-  std::size_t on_surface_vertices = 0;  ///< folded vertices kept on the surface
+  std::size_t folded_vertices = 0;      ///< vertices split into sectors (docs/validity.md)
+  std::size_t sectors = 0;              ///< sectors of the folded vertices
+  std::size_t gap_tets = 0;             ///< tets filling the gaps between sectors
+  std::size_t on_surface_vertices = 0;  ///< vertices kept on the surface (no split found)
   std::size_t cap_faces = 0;
   std::size_t floor_drops = 0;
   bool floor_valid = true;
@@ -143,8 +146,8 @@ ShellResult build_shell(const LoadedSurface& surface, const ShellOptions& option
                         const RunControl& control = {});
 
 /// Validates `mesh` as make_surface() does (closed, 2-manifold, not crossing itself, finite,
-/// indices in range; messages name `source`) and builds its shell. Vertices no triangle uses are dropped (a
-/// notice says so), so the shell's first points are the used vertices in their order.
+/// indices in range; messages name `source`) and builds its shell. Vertices no triangle uses are
+/// dropped (a notice says so), so the shell's first points are the used vertices in their order.
 ShellResult build_shell(const SurfaceMesh& mesh, const ShellOptions& options,
                         const RunControl& control = {}, const std::string& source = "surface mesh");
 

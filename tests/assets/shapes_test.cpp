@@ -47,7 +47,7 @@ void PrintTo(const Expected& e, std::ostream* os) {
 const Expected kExpected[] = {
     {"box", 0, 48},   {"cylinder", 0, 48}, {"sphere", 0, 760},     {"tube", 1, 512},
     {"torus", 1, 0},  {"bowl", 0, 2680},   {"funnel", 1, 1280},    {"star", 0, 588},
-    {"horn", 0, 408}, {"pointy", 0, 96},   {"propeller", 0, 1200},
+    {"horn", 0, 408}, {"pointy", 0, 96},   {"propeller", 0, 1200}, {"flap", 0, 0},
 };
 
 PolygonSoup to_soup(const SurfaceMesh& mesh) {

@@ -87,7 +87,8 @@ ShellRun shell_of(const SurfaceMesh& mesh, const std::string& name, int resoluti
   }
   out.exit_code = 0;
   out.report = nlohmann::json::parse(report_json(out.result));
-  out.problems = test::independent_shell_problems(out.result.surface, out.result.mesh);
+  out.problems = test::independent_shell_problems(out.result.surface, out.result.mesh,
+                                                  2 * out.result.validity.sectors);
   out.coverage = test::independent_coverage(out.result.surface, out.result.mesh);
   return out;
 }

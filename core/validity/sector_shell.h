@@ -1,0 +1,37 @@
+// sector_shell.h — the valid shell of a split surface (core/inner/sectors.h) as a shell of the
+// input: the vertex copies joined back into their vertex, and the wedge-shaped gaps between
+// neighbouring sectors filled with tets (docs/validity.md, "Folded vertices").
+//
+// At a sector boundary, the fan edge e = (v, b) between faces f and g, the prisms of f and g
+// have the side quads (v, b, b', p_f) and (v, b, b', p_g), with p_f and p_g the inner vertices
+// of v's two sectors and b' the inner vertex of b. Between them lies a gap of five vertices,
+// filled with one or two tets joining the surface vertex v (or b) to the inner vertices, as the
+// cuts of the two quads (from v or from b, assemble.h) dictate:
+//     both from v:           (v, b', p_f, p_g)
+//     both from b:           (b, v, p_f, p_g), (b, b', p_f, p_g)
+//     f's from v, g's from b: (v, b, b', p_g), (v, b', p_f, p_g)   (and mirrored)
+// Gaps whose b is split at the same edge, or whose two sectors share an inner vertex, are left
+// open. Each gap tet is oriented by its volume; the whole shell is then checked on the input
+// surface and every gap tet that offends (flat, inverted, overlapping, leaking) is removed until
+// it passes: the shell without gap tets is the split surface's valid shell, so this ends valid.
+// At most 2 tets per sector boundary: T <= 3F + 2 * sectors.
+#pragma once
+
+#include <cstddef>
+
+#include "core/inner/sectors.h"
+#include "core/validity/search.h"
+
+namespace vdb_shell {
+
+struct SectorShell {
+  std::size_t gap_tets = 0;      ///< tets filling gaps between sectors, in the shell
+  std::size_t dropped_gaps = 0;  ///< gap tets removed because they offended
+};
+
+/// Turns `valid`, the valid shell of split.surface, into a shell of `surface`: joins the copies
+/// (points and tets renumbered), fills the sector gaps and checks the result on `surface`
+/// (valid.checks). valid.input stays on the split surface.
+SectorShell join_sectors(const SurfaceMesh& surface, const SectorSplit& split, ValidShell& valid);
+
+}  // namespace vdb_shell
