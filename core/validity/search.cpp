@@ -482,6 +482,46 @@ bool drop_floors(ShellSearch& search, State& s, const SurfaceMesh& surface, cons
   return dropped;
 }
 
+/// Gives depth back where the search took more than it needed: every vertex below its traced
+/// depth goes one step deeper (t / shrink) and the rounds run again from there, stepping back
+/// only what offends now; a vertex stepped back in a pass is not raised again. At most
+/// options.give_back passes; a pass that does not end valid is undone.
+template <class Rounds>
+void give_back(const ShellSearch& search, State& s, const ValidityOptions& options, ValidShell& out,
+               std::vector<char>& lowered, std::vector<std::uint32_t>& seeds,
+               const Rounds& search_rounds) {
+  const auto n = static_cast<std::uint32_t>(s.t.size());
+  std::vector<char> settled(n, 0);
+  std::vector<std::uint32_t> raised;
+  std::vector<double> raised_to(n, 0.0);
+  for (int pass = 0; pass < options.give_back && out.checks.valid(); ++pass) {
+    const State before = s;
+    const ShellInput input = out.input;
+    std::fill(lowered.begin(), lowered.end(), 0);
+    raised.clear();
+    for (std::uint32_t v = 0; v < n; ++v) {
+      const double full = search.full()[v];
+      if (settled[v] || s.welded[v] || s.t[v] == 0 || !(s.t[v] < full * (1 - 1e-12))) continue;
+      s.t[v] = raised_to[v] = std::min(full, s.t[v] / options.shrink);
+      raised.push_back(v);
+      lowered[v] = 1;
+    }
+    if (raised.empty()) break;
+    search.faces_around(lowered, seeds);
+    search_rounds(false);
+    if (!out.checks.valid()) {  // not expected (the floors are unchanged): keep the last valid
+      s = before;
+      out.input = input;
+      out.stalled = false;
+      out.floor_valid = true;
+      out.checks = ShellCheckResult{};
+      break;
+    }
+    for (const std::uint32_t v : raised)
+      if (s.t[v] < raised_to[v]) settled[v] = 1;
+  }
+}
+
 }  // namespace
 
 ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& traces,
@@ -513,73 +553,79 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
   std::vector<std::uint32_t> seeds(surface.triangles.size());  // prisms to settle
   std::iota(seeds.begin(), seeds.end(), 0u);
   double first_offenders = 1;
-  for (;; ++out.rounds) {
-    // Inverted and flat tets are local: settle them prism by prism before a round.
-    out.unwelded +=
-        search.settle_volumes(s, seeds, options.shrink, check_options.zero_volume_tolerance,
-                              options.min_quality, lowered);
-    out.input = search.build(s, members);
-    out.shell = assemble_shell(surface, out.input, no_quality);
-    out.checks = check(out.shell.mesh);
-    if (out.checks.valid() || out.rounds >= options.max_rounds) break;
-    collect_offenders(surface, out.input, out.checks, bad_tets, bad_slots);
-    // Progress: the share of the first round's offenders gone (the final check is the last 10%).
-    const double offenders =
-        double(bad_tets.size() + bad_slots.size() + out.checks.first_overlapping_pairs.size());
-    if (out.rounds == 0) first_offenders = std::max(offenders, 1.0);
-    monitor.report(0.9 * (1.0 - offenders / first_offenders));
-    std::fill(lowered.begin(), lowered.end(), 0);
-    // Overlapping prisms, pair by pair: each is stepped back until it is apart.
-    prism_pairs = overlapping_prisms(out.checks, out.shell.mesh);
-    out.unwelded += search.settle_overlaps(s, prism_pairs, options.shrink, check_options,
-                                           options.min_quality, lowered);
-    bool progress = std::find(lowered.begin(), lowered.end(), 1) != lowered.end();
-    const auto n_slots = static_cast<std::uint32_t>(out.input.inner_points.size());
-    auto slot_depth = [&](std::uint32_t slot) {
-      double d = 0;
-      if (slot >= n_slots) return d;  // a cap point: never moves
-      for (std::uint32_t v : members[slot])
-        if (s.welded[v] || s.t[v] > search.floor()[v]) d = std::max(d, s.t[v]);
-      return d;  // 0: every member at its floor, nothing to move
-    };
-    auto lower = [&](std::uint32_t slot) {  // a welded slot leaves its weld whole
-      for (std::uint32_t v : members[slot])
-        if (!lowered[v])
-          out.unwelded += search.step_back(s, v, options.shrink, [&](std::uint32_t u) {
-            lowered[u] = 1;
-            progress = true;
-          });
-    };
-    for (std::uint32_t t : bad_tets) {
-      std::uint32_t best = UINT32_MAX;
-      double best_depth = 0;
-      for (std::uint32_t p : out.shell.mesh.tets[t]) {
-        if (p < n) continue;
-        const double d = slot_depth(p - n);
-        if (d > best_depth) {
-          best_depth = d;
-          best = p - n;
+  // Rounds until no element offends or the search stalls (the first search reports progress).
+  const auto search_rounds = [&](bool report) {
+    for (;; ++out.rounds) {
+      // Inverted and flat tets are local: settle them prism by prism before a round.
+      out.unwelded +=
+          search.settle_volumes(s, seeds, options.shrink, check_options.zero_volume_tolerance,
+                                options.min_quality, lowered);
+      out.input = search.build(s, members);
+      out.shell = assemble_shell(surface, out.input, no_quality);
+      out.checks = check(out.shell.mesh);
+      if (out.checks.valid() || out.rounds >= options.max_rounds) break;
+      collect_offenders(surface, out.input, out.checks, bad_tets, bad_slots);
+      // Progress: the share of the first round's offenders gone (the final check is the last 10%).
+      const double offenders =
+          double(bad_tets.size() + bad_slots.size() + out.checks.first_overlapping_pairs.size());
+      if (out.rounds == 0) first_offenders = std::max(offenders, 1.0);
+      if (report) monitor.report(0.9 * (1.0 - offenders / first_offenders));
+      std::fill(lowered.begin(), lowered.end(), 0);
+      // Overlapping prisms, pair by pair: each is stepped back until it is apart.
+      prism_pairs = overlapping_prisms(out.checks, out.shell.mesh);
+      out.unwelded += search.settle_overlaps(s, prism_pairs, options.shrink, check_options,
+                                             options.min_quality, lowered);
+      bool progress = std::find(lowered.begin(), lowered.end(), 1) != lowered.end();
+      const auto n_slots = static_cast<std::uint32_t>(out.input.inner_points.size());
+      auto slot_depth = [&](std::uint32_t slot) {
+        double d = 0;
+        if (slot >= n_slots) return d;  // a cap point: never moves
+        for (std::uint32_t v : members[slot])
+          if (s.welded[v] || s.t[v] > search.floor()[v]) d = std::max(d, s.t[v]);
+        return d;  // 0: every member at its floor, nothing to move
+      };
+      auto lower = [&](std::uint32_t slot) {  // a welded slot leaves its weld whole
+        for (std::uint32_t v : members[slot])
+          if (!lowered[v])
+            out.unwelded += search.step_back(s, v, options.shrink, [&](std::uint32_t u) {
+              lowered[u] = 1;
+              progress = true;
+            });
+      };
+      for (std::uint32_t t : bad_tets) {
+        std::uint32_t best = UINT32_MAX;
+        double best_depth = 0;
+        for (std::uint32_t p : out.shell.mesh.tets[t]) {
+          if (p < n) continue;
+          const double d = slot_depth(p - n);
+          if (d > best_depth) {
+            best_depth = d;
+            best = p - n;
+          }
         }
+        if (best != UINT32_MAX) lower(best);
       }
-      if (best != UINT32_MAX) lower(best);
+      for (std::uint32_t slot : bad_slots)
+        if (slot_depth(slot) > 0) lower(slot);
+      if (!progress) {
+        progress = drop_floors(search, s, surface, out.shell.mesh, prism_pairs, bad_tets, bad_slots,
+                               members, n_slots, options, lowered, out.floor_drops);
+      }
+      if (!progress) {
+        // The floors are as low as they go: the floor configuration itself must be invalid.
+        const ShellInput in = search.build(search.floor_state(), members);
+        const ShellCheckResult c =
+            check_shell(surface, assemble_shell(surface, in, no_quality).mesh);
+        out.floor_valid = c.valid();
+        if (!out.floor_valid) out.floor_problems = describe_problems(c);
+        out.stalled = true;
+        break;
+      }
+      search.faces_around(lowered, seeds);
     }
-    for (std::uint32_t slot : bad_slots)
-      if (slot_depth(slot) > 0) lower(slot);
-    if (!progress) {
-      progress = drop_floors(search, s, surface, out.shell.mesh, prism_pairs, bad_tets, bad_slots,
-                             members, n_slots, options, lowered, out.floor_drops);
-    }
-    if (!progress) {
-      // The floors are as low as they go: the floor configuration itself must be invalid.
-      const ShellInput in = search.build(search.floor_state(), members);
-      const ShellCheckResult c = check_shell(surface, assemble_shell(surface, in, no_quality).mesh);
-      out.floor_valid = c.valid();
-      if (!out.floor_valid) out.floor_problems = describe_problems(c);
-      out.stalled = true;
-      break;
-    }
-    search.faces_around(lowered, seeds);
-  }
+  };
+  search_rounds(true);
+  give_back(search, s, options, out, lowered, seeds, search_rounds);
 
   out.seconds = seconds_since(t0);
   monitor.report(0.9);

@@ -56,6 +56,9 @@ struct ValidityOptions {
   double floor_drop = 0.25;      ///< factor on the floor of a vertex offending at its floor
   int max_floor_drops = 4;       ///< at most this many floor drops per vertex
   int max_rounds = 1000;         ///< safety net (rounds are cheap)
+  /// Passes giving depth back once the shell is valid: every vertex below its traced depth one
+  /// step deeper, the rounds again from there (0: none).
+  int give_back = 2;
 };
 
 struct ValidShell {
