@@ -126,7 +126,7 @@ ShellResult run(const LoadedSurface& surface, const ShellOptions& options,
     r.traces = trace_paths(mesh, *fields, options.trace, make_vdb_point_index, monitor);
     // Folded vertices: their fans split into sectors, each traced from the vertex along its
     // own inward direction (core/inner/sectors.h).
-    split = split_folded_vertices(mesh);
+    if (!options.traces_only) split = split_folded_vertices(mesh);
     if (!split.empty())
       split_traces = retrace_split(r.traces, split.surface, split.vertex, split.direction, *fields,
                                    options.trace);
@@ -146,7 +146,7 @@ ShellResult run(const LoadedSurface& surface, const ShellOptions& options,
   {
     const auto t0 = Clock::now();
     StageMonitor monitor(control, "inner");
-    inner = place_inner_vertices(work, work_traces, options.thickness);
+    inner = place_inner_vertices(work, work_traces, options.thickness, split.vertex);
     inner.constraints = split.constraints;
     monitor.finish();
     r.timings.inner = seconds_since(t0);

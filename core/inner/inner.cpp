@@ -24,7 +24,8 @@ Vec3d point_at_arc(const TraceResult& t, std::size_t v, double s) {
 }
 
 InnerVertices place_inner_vertices(const SurfaceMesh& mesh, const TraceResult& traces,
-                                   const ThicknessOptions& options) {
+                                   const ThicknessOptions& options,
+                                   const std::vector<std::uint32_t>& vertex) {
   if (!(options.max_thickness >= 0.0) || !std::isfinite(options.max_thickness))
     throw InputError("--max-thickness must be a finite length >= 0 (0: no limit)");
   if (!(options.edge_factor >= 0.0) || !std::isfinite(options.edge_factor))
@@ -34,18 +35,21 @@ InnerVertices place_inner_vertices(const SurfaceMesh& mesh, const TraceResult& t
   std::vector<double> limit(n, INFINITY);
   if (options.max_thickness > 0.0) std::fill(limit.begin(), limit.end(), options.max_thickness);
   if (options.edge_factor > 0.0) {
+    // Per vertex (copies count as their vertex): the sum and count of its incident edges.
+    const auto of = [&](std::uint32_t v) { return vertex.empty() ? v : vertex[v]; };
     std::vector<double> sum(n, 0.0);
     std::vector<int> count(n, 0);
     for (const Triangle& t : mesh.triangles)
       for (int k = 0; k < 3; ++k) {  // each edge is seen from both of its faces: halves cancel
         const double l = distance(mesh.points[t[k]], mesh.points[t[(k + 1) % 3]]);
-        sum[t[k]] += l;
-        sum[t[(k + 1) % 3]] += l;
-        count[t[k]] += 1;
-        count[t[(k + 1) % 3]] += 1;
+        sum[of(t[k])] += l;
+        sum[of(t[(k + 1) % 3])] += l;
+        count[of(t[k])] += 1;
+        count[of(t[(k + 1) % 3])] += 1;
       }
-    for (std::size_t v = 0; v < n; ++v)
-      if (count[v]) limit[v] = std::min(limit[v], options.edge_factor * sum[v] / count[v]);
+    for (std::uint32_t v = 0; v < n; ++v)
+      if (count[of(v)])
+        limit[v] = std::min(limit[v], options.edge_factor * sum[of(v)] / count[of(v)]);
   }
 
   InnerVertices out;

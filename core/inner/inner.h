@@ -59,9 +59,13 @@ struct InnerVertices {
   std::size_t welded = 0;   ///< surface vertices sharing another's inner vertex
 };
 
+/// \param vertex  empty, or per point of `mesh` the vertex it is (a split surface's copies,
+///                SectorSplit::vertex): the edge-factor limit of a copy is its vertex's, over
+///                the whole fan.
 /// \throw InputError for negative or non-finite limits.
 InnerVertices place_inner_vertices(const SurfaceMesh& mesh, const TraceResult& traces,
-                                   const ThicknessOptions& options);
+                                   const ThicknessOptions& options,
+                                   const std::vector<std::uint32_t>& vertex = {});
 
 /// Point of trace v at arc length `s` (clamped to the trace), interpolated linearly.
 Vec3d point_at_arc(const TraceResult& traces, std::size_t v, double s);

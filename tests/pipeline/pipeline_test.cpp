@@ -200,6 +200,13 @@ TEST(Pipeline, ThicknessLimitsHoldOnAFineMesh) {
   const std::vector<double> edge = mean_incident_edge(r.surface);
   EXPECT_GT(r.counts.thickness_limited_vertices, 1000u);
   EXPECT_LE(largest_thickness_ratio(r, [&](std::uint32_t v) { return 5 * edge[v]; }), 1 + 1e-12);
+  // A folded vertex's sectors: each limited by the vertex's own mean edge over its whole fan.
+  const SurfaceMesh flap = make_shape("flap", 2);
+  o.thickness.edge_factor = 1;
+  r = build_shell(flap, o);
+  ASSERT_EQ(r.validity.folded_vertices, 1u);
+  const std::vector<double> flap_edge = mean_incident_edge(flap);
+  EXPECT_LE(largest_thickness_ratio(r, [&](std::uint32_t v) { return flap_edge[v]; }), 1 + 1e-12);
 }
 
 TEST(Pipeline, EdgeFactorThicknessLimitHolds) {

@@ -11,7 +11,9 @@
 
 #include "assets/shapes.h"
 #include "core/base/vec3.h"
+#include "core/inner/inner.h"
 #include "core/inner/sectors.h"
+#include "core/trace/trace.h"
 
 namespace vdb_shell {
 namespace {
@@ -110,6 +112,44 @@ TEST(Sectors, TheFlapsFoldedVertexIsSplitIntoInwardSectors) {
   }
   EXPECT_EQ(faces, fan_normals.size());
   EXPECT_EQ(split.boundaries.size(), split.sectors);
+}
+
+TEST(Sectors, ACopyHasItsVertexsEdgeFactorLimit) {
+  // Straight traces, far longer than the limits: every sector of the flap's centre is limited
+  // to K times the centre's mean incident edge over its whole fan, not over its sector's.
+  const SurfaceMesh mesh = make_shape("flap", 2);
+  const SectorSplit split = split_folded_vertices(mesh);
+  ASSERT_FALSE(split.empty());
+  TraceResult traces;
+  traces.offsets.push_back(0);
+  for (const Vec3d& p : split.surface.points) {
+    traces.samples.insert(traces.samples.end(), {p, p - Vec3d{0, 0, 10}});
+    traces.arc_length.insert(traces.arc_length.end(), {0.0, 10.0});
+    traces.end.push_back(1);
+    traces.offsets.push_back(static_cast<std::uint32_t>(traces.samples.size()));
+  }
+  ThicknessOptions options;
+  options.edge_factor = 0.5;
+  const std::uint32_t centre = split.folded.front();
+  double sum = 0;
+  int count = 0;
+  for (const Triangle& t : mesh.triangles)
+    for (int k = 0; k < 3; ++k)
+      if (t[k] == centre) {
+        sum += distance(mesh.points[centre], mesh.points[t[(k + 1) % 3]]) +
+               distance(mesh.points[centre], mesh.points[t[(k + 2) % 3]]);
+        count += 2;
+      }
+  const InnerVertices joined = place_inner_vertices(split.surface, traces, options, split.vertex);
+  const InnerVertices alone = place_inner_vertices(split.surface, traces, options);
+  bool sector_mean_differs = false;
+  for (std::uint32_t u = 0; u < split.surface.points.size(); ++u) {
+    if (split.vertex[u] != centre) continue;
+    EXPECT_NEAR(joined.limit[u], 0.5 * sum / count, 1e-12) << u;
+    EXPECT_NEAR(joined.arc[u], 0.5 * sum / count, 1e-12) << u;
+    sector_mean_differs = sector_mean_differs || std::abs(alone.limit[u] - joined.limit[u]) > 1e-6;
+  }
+  EXPECT_TRUE(sector_mean_differs);  // what the test tells apart
 }
 
 TEST(Sectors, ASurfaceWithoutFoldsIsNotSplit) {
