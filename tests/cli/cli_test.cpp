@@ -65,6 +65,23 @@ TEST(Cli, BadInputIsOneLineAndExitCode2) {
   EXPECT_NE(r.err.find("open.obj"), std::string::npos) << r.err;
 }
 
+TEST(Cli, ACrossingSurfaceIsRefusedInEveryMode) {
+  // Two tetrahedra through each other: closed, manifold and outward, but crossing.
+  TempDir dir;
+  std::string text = kTetObj;
+  text += "v 0.5 0.5 0.5\nv 2.5 0.5 0.5\nv 0.5 2.5 0.5\nv 0.5 0.5 2.5\n";
+  text += "f 5 7 6\nf 5 6 8\nf 6 7 8\nf 7 5 8\n";
+  test::write_text(dir.file("two.obj"), text);
+  for (const std::string& args : {std::string(), " -o '" + dir.file("two.vtu") + "' -r 16"}) {
+    const auto r = run_command(test::vdb_shell_bin() + " '" + dir.file("two.obj") + "'" + args);
+    EXPECT_EQ(r.exit_code, 2) << args;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_NE(r.err.find("self-intersections"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(" cross at ("), std::string::npos) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("two.vtu")));
+  }
+}
+
 TEST(Cli, MissingAndEmptyFilesExit2) {
   TempDir dir;
   test::write_text(dir.file("empty.stl"), "");
