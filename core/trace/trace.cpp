@@ -45,6 +45,25 @@ struct OneTrace {
   StopReason stop = StopReason::kCap;
 };
 
+/// The rows of `rows` as r's compressed traces, each ending at its last sample, unmerged.
+void pack_traces(const std::vector<OneTrace>& rows, TraceResult& r) {
+  const std::size_t n = rows.size();
+  r.offsets.assign(n + 1, 0);
+  for (std::size_t v = 0; v < n; ++v)
+    r.offsets[v + 1] = r.offsets[v] + static_cast<std::uint32_t>(rows[v].samples.size());
+  r.samples.resize(r.offsets[n]);
+  r.arc_length.resize(r.offsets[n]);
+  r.end.resize(n);
+  r.stop.resize(n);
+  r.merged_with.assign(n, -1);
+  for (std::size_t v = 0; v < n; ++v) {
+    std::copy(rows[v].samples.begin(), rows[v].samples.end(), r.samples.begin() + r.offsets[v]);
+    std::copy(rows[v].arc.begin(), rows[v].arc.end(), r.arc_length.begin() + r.offsets[v]);
+    r.end[v] = static_cast<std::uint32_t>(rows[v].samples.size() - 1);
+    r.stop[v] = rows[v].stop;
+  }
+}
+
 void trace_one(FieldProbe& probe, const Vec3d& p, bool planar, const TraceOptions& opt,
                const TraceParameters& par, OneTrace& t) {
   t.samples.assign(1, p);
@@ -368,46 +387,30 @@ TraceResult retrace_split(const TraceResult& traces, const SurfaceMesh& surface,
   TraceResult r;
   r.parameters = traces.parameters;
   r.planar = classify_vertices(surface, options.planar_angle);
-  std::vector<OneTrace> fresh(n);
+  std::vector<OneTrace> rows(n);
   const std::unique_ptr<FieldProbe> probe = fields.probe();
   for (std::size_t u = 0; u < n; ++u) {
-    if (norm2(first_direction[u]) == 0) continue;
+    OneTrace& t = rows[u];
+    if (norm2(first_direction[u]) == 0) {  // the traced surface's own trace
+      const auto first = traces.offsets[source[u]], last = traces.offsets[source[u] + 1];
+      t.samples.assign(traces.samples.begin() + first, traces.samples.begin() + last);
+      t.arc.assign(traces.arc_length.begin() + first, traces.arc_length.begin() + last);
+      t.stop = traces.stop[source[u]];
+      continue;
+    }
     const Vec3d p = surface.points[u];
-    OneTrace& t = fresh[u];
     trace_one(*probe, p + first_direction[u] * r.parameters.step, r.planar[u] != 0, options,
               r.parameters, t);
     t.samples.insert(t.samples.begin(), p);
     for (double& a : t.arc) a += r.parameters.step;
     t.arc.insert(t.arc.begin(), 0.0);
   }
-  r.offsets.assign(n + 1, 0);
+  pack_traces(rows, r);
   for (std::size_t u = 0; u < n; ++u)
-    r.offsets[u + 1] = r.offsets[u] + static_cast<std::uint32_t>(fresh[u].samples.empty()
-                                                                     ? traces.num_samples(source[u])
-                                                                     : fresh[u].samples.size());
-  r.samples.reserve(r.offsets[n]);
-  r.arc_length.reserve(r.offsets[n]);
-  r.end.resize(n);
-  r.stop.resize(n);
-  r.merged_with.assign(n, -1);
-  for (std::size_t u = 0; u < n; ++u) {
-    if (fresh[u].samples.empty()) {
-      const std::uint32_t s = source[u];
-      const auto first = traces.offsets[s], last = traces.offsets[s + 1];
-      r.samples.insert(r.samples.end(), traces.samples.begin() + first,
-                       traces.samples.begin() + last);
-      r.arc_length.insert(r.arc_length.end(), traces.arc_length.begin() + first,
-                          traces.arc_length.begin() + last);
-      r.end[u] = traces.end[s];
-      r.stop[u] = traces.stop[s];
-      r.merged_with[u] = traces.merged_with[s];
-    } else {
-      r.samples.insert(r.samples.end(), fresh[u].samples.begin(), fresh[u].samples.end());
-      r.arc_length.insert(r.arc_length.end(), fresh[u].arc.begin(), fresh[u].arc.end());
-      r.end[u] = static_cast<std::uint32_t>(fresh[u].samples.size() - 1);
-      r.stop[u] = fresh[u].stop;
+    if (norm2(first_direction[u]) == 0) {  // ended where merges ended it
+      r.end[u] = traces.end[source[u]];
+      r.merged_with[u] = traces.merged_with[source[u]];
     }
-  }
   for (StopReason s : r.stop) ++r.stop_count[static_cast<std::size_t>(s)];
   return r;
 }
@@ -430,20 +433,7 @@ TraceResult trace_paths(const SurfaceMesh& mesh, const FieldSampler& fields,
       monitor.advance();
     }
   });
-  r.offsets.assign(n + 1, 0);
-  for (std::size_t v = 0; v < n; ++v)
-    r.offsets[v + 1] = r.offsets[v] + static_cast<std::uint32_t>(traces[v].samples.size());
-  r.samples.resize(r.offsets[n]);
-  r.arc_length.resize(r.offsets[n]);
-  r.end.resize(n);
-  r.stop.resize(n);
-  r.merged_with.assign(n, -1);
-  for (std::size_t v = 0; v < n; ++v) {
-    std::copy(traces[v].samples.begin(), traces[v].samples.end(), r.samples.begin() + r.offsets[v]);
-    std::copy(traces[v].arc.begin(), traces[v].arc.end(), r.arc_length.begin() + r.offsets[v]);
-    r.end[v] = static_cast<std::uint32_t>(traces[v].samples.size() - 1);
-    r.stop[v] = traces[v].stop;
-  }
+  pack_traces(traces, r);
   traces.clear();
   r.seconds_tracing = seconds_since(t0);
 
