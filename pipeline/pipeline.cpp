@@ -157,7 +157,7 @@ ShellResult run(const LoadedSurface& surface, const ShellOptions& options,
     ActiveStage active(monitor);
     ValidShell valid = make_valid_shell(work, work_traces, inner, options.validity, monitor);
     if (valid.checks.valid() && !split.empty()) {
-      const SectorShell sectors = join_sectors(mesh, split, valid);
+      const SectorShell sectors = join_sectors(mesh, split, valid, options.validity.min_quality);
       r.validity.gap_tets = sectors.gap_tets;
     }
     r.quality = summarize_quality(mesh, valid.shell.mesh);

@@ -35,7 +35,7 @@ void join_points(const SectorSplit& split, std::size_t n, TetMesh& mesh) {
 /// follows, in the joined mesh's numbering.
 std::vector<std::pair<std::uint32_t, Tet>> gap_tets(const SectorSplit& split,
                                                     const ShellInput& input, std::size_t n,
-                                                    const TetMesh& mesh) {
+                                                    const TetMesh& mesh, double min_quality) {
   // Per face: its tets [first[f], first[f + 1]) (assemble_shell() groups them by face).
   std::vector<std::size_t> first(split.surface.triangles.size() + 1, 0);
   for (const std::uint32_t f : mesh.source_triangle) ++first[f + 1];
@@ -75,7 +75,7 @@ std::vector<std::pair<std::uint32_t, Tet>> gap_tets(const SectorSplit& split,
     for (Tet t : tets) {
       const auto& p = mesh.points;
       if (tet_volume(p[t[0]], p[t[1]], p[t[2]], p[t[3]]) < 0) std::swap(t[2], t[3]);
-      out.push_back({f, t});
+      if (tet_quality(p[t[0]], p[t[1]], p[t[2]], p[t[3]]) >= min_quality) out.push_back({f, t});
     }
   }
   return out;
@@ -127,11 +127,12 @@ void remove_tets(const std::vector<char>& remove, TetMesh& mesh, std::vector<cha
 
 }  // namespace
 
-SectorShell join_sectors(const SurfaceMesh& surface, const SectorSplit& split, ValidShell& valid) {
+SectorShell join_sectors(const SurfaceMesh& surface, const SectorSplit& split, ValidShell& valid,
+                         double min_quality) {
   const std::size_t n = surface.points.size();
   TetMesh& mesh = valid.shell.mesh;
   SectorShell out;
-  const auto gaps = gap_tets(split, valid.input, n, mesh);
+  const auto gaps = gap_tets(split, valid.input, n, mesh, min_quality);
   join_points(split, n, mesh);
   std::vector<char> is_gap;
   insert_gaps(gaps, mesh, is_gap);

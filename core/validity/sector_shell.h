@@ -11,7 +11,8 @@
 //     both from b:           (b, v, p_f, p_g), (b, b', p_f, p_g)
 //     f's from v, g's from b: (v, b, b', p_g), (v, b', p_f, p_g)   (and mirrored)
 // Gaps whose b is split at the same edge, or whose two sectors share an inner vertex, are left
-// open. Each gap tet is oriented by its volume; the whole shell is then checked on the input
+// open, and so are gap tets below the search's minimum quality. Each gap tet is oriented by its
+// volume; the whole shell is then checked on the input
 // surface and every gap tet that offends (flat, inverted, overlapping, leaking) is removed until
 // it passes: the shell without gap tets is the split surface's valid shell, so this ends valid.
 // At most 2 tets per sector boundary: T <= 3F + 2 * sectors.
@@ -32,6 +33,9 @@ struct SectorShell {
 /// Turns `valid`, the valid shell of split.surface, into a shell of `surface`: joins the copies
 /// (points and tets renumbered), fills the sector gaps and checks the result on `surface`
 /// (valid.checks). valid.input stays on the split surface.
-SectorShell join_sectors(const SurfaceMesh& surface, const SectorSplit& split, ValidShell& valid);
+/// Gap tets of a volume-length quality below `min_quality` are not added (the search does not
+/// leave such slivers where it can move a corner either).
+SectorShell join_sectors(const SurfaceMesh& surface, const SectorSplit& split, ValidShell& valid,
+                         double min_quality);
 
 }  // namespace vdb_shell
