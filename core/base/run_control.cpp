@@ -36,6 +36,11 @@ void StageMonitor::report(double fraction) const {
   if (progress_) emit(fraction, false);
 }
 
+void StageMonitor::milestone(double fraction) const {
+  check();
+  emit(fraction, true);
+}
+
 void StageMonitor::begin_part(double lo, double hi, std::size_t items) const {
   std::lock_guard<std::mutex> lock(mutex_);
   part_lo_ = lo;

@@ -49,6 +49,9 @@ class StageMonitor {
   /// Reports `fraction` of the stage done (clamped to [0, 1], never below an earlier report),
   /// at most every 50 ms; checks the flag. Thread-safe.
   void report(double fraction) const;
+  /// report(), but always passed on: a milestone of the stage (a part of it done), which the
+  /// progress callback then sees however short the stage was.
+  void milestone(double fraction) const;
   /// Work counted in items: the stage's fractions [lo, hi] are spent on `items` items, which
   /// advance() then counts. Call from one thread between parallel phases.
   void begin_part(double lo, double hi, std::size_t items) const;

@@ -628,7 +628,7 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
   give_back(search, s, options, out, lowered, seeds, search_rounds);
 
   out.seconds = seconds_since(t0);
-  monitor.report(0.9);
+  monitor.milestone(0.9);  // the search is done; the final full check is the rest
 
   // The incremental checks trusted unchanged tets; the result carries one full check (the
   // confirmation every run gets, valid search or not: out.checks.seconds, not out.seconds).
