@@ -450,8 +450,18 @@ void register_options(CLI::App& app, CliOptions& opt) {
                  "extension of -o)")
       ->check(CLI::IsMember({"vtu", "vtk", "msh", "mesh", "ele"}))
       ->group(og);
-  app.add_option("--msh-version", opt.msh_version, "Gmsh format: 41 (4.1) or 22 (2.2)")
-      ->check(CLI::IsMember({41, 22}))
+  app.add_option("--msh-version", opt.msh_version, "Gmsh format: 4.1 or 2.2 (also as 41, 22)")
+      ->transform(CLI::Validator(
+          [](std::string& value) {
+            if (value == "4.1" || value == "41") value = "41";
+            if (value == "2.2" || value == "22") value = "22";
+            return value == "41" || value == "22"
+                       ? std::string()
+                       : "must be 4.1 or 2.2 (the Gmsh format version), not " + value;
+          },
+          ""))
+      ->type_name("4.1|2.2")
+      ->default_str("4.1")
       ->group(og);
   app.add_option("--inner", opt.inner, "Write the inner surface (.obj .ply .off)")->group(og);
   app.add_option("--report", opt.report,

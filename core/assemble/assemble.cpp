@@ -136,6 +136,12 @@ AssembleResult assemble_shell(const SurfaceMesh& surface, const ShellInput& inpu
   mesh.inner.assign(mesh.points.size(), 0);
   std::fill(mesh.inner.begin() + static_cast<std::ptrdiff_t>(n_surface), mesh.inner.end(), 1);
 
+  // Per point its surface vertex: surface points themselves, an inner point the smallest surface
+  // vertex ending there (set below, in vertex order), a cap point its face's first corner.
+  mesh.surface_vertex.assign(mesh.points.size(), UINT32_MAX);
+  for (std::uint32_t v = 0; v < n_surface; ++v) mesh.surface_vertex[v] = v;
+  for (std::size_t k = 0; k < n_caps; ++k)
+    mesh.surface_vertex[n_surface + n_inner + k] = surface.triangles[input.cap_faces[k]][0];
   // Thickness of an inner vertex: its distance to the farthest surface vertex that ends there.
   mesh.thickness.assign(mesh.points.size(), 0.0);
   std::vector<std::uint8_t> used(n_inner, 0);
@@ -146,6 +152,8 @@ AssembleResult assemble_shell(const SurfaceMesh& surface, const ShellInput& inpu
       continue;
     }
     used[i] = 1;
+    std::uint32_t& owner = mesh.surface_vertex[n_surface + i];
+    owner = std::min(owner, static_cast<std::uint32_t>(v));
     double& t = mesh.thickness[n_surface + i];
     t = std::max(t, distance(surface.points[v], input.inner_points[i]));
   }

@@ -30,6 +30,9 @@ struct TetMesh {
   std::vector<std::uint32_t> source_triangle;  ///< per tet: index of its input triangle
   std::vector<std::uint8_t> inner;             ///< per point: 1 for traced (inner) vertices
   std::vector<double> thickness;               ///< per point: trace length, world units
+  /// per point: the surface vertex it belongs to (itself for surface points; for an inner point
+  /// the smallest surface vertex whose inner vertex it is)
+  std::vector<std::uint32_t> surface_vertex;
 };
 
 }  // namespace vdb_shell

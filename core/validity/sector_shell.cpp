@@ -28,6 +28,8 @@ void join_points(const SectorSplit& split, std::size_t n, TetMesh& mesh) {
   };
   drop_copies(mesh.inner);
   drop_copies(mesh.thickness);
+  drop_copies(mesh.surface_vertex);
+  for (std::uint32_t& v : mesh.surface_vertex) v = join(v);
   drop_copies(mesh.points);
 }
 

@@ -21,62 +21,13 @@
 #include "core/base/file_name.h"
 #include "core/base/tet_faces.h"
 #include "core/write/atomic_file.h"
+#include "core/write/format_writers.h"
+#include "core/write/text_out.h"
 
 namespace vdb_shell {
 namespace {
 
-constexpr int kVtkTetra = 10;      // VTK_TETRA
-constexpr int kGmshTetra = 4;      // Gmsh element type: 4-node tetrahedron
-constexpr int kGmshVolumeTag = 1;  // the single volume entity (and physical group) of .msh files
-constexpr int kDoubleDigits = 17;  // %.17g: every double reads back exactly
-
-// ---------------------------------------------------------------------------------------------
-// Text formatting
-
-/// Appends text to a buffer and hands it to the stream in chunks.
-class TextOut {
- public:
-  explicit TextOut(std::ostream& os) : os_(os) { buffer_.reserve(kChunk + 512); }
-  TextOut(const TextOut&) = delete;
-  TextOut& operator=(const TextOut&) = delete;
-
-  TextOut& str(std::string_view s) {
-    buffer_.append(s.data(), s.size());
-    return maybe_flush();
-  }
-  TextOut& ch(char c) {
-    buffer_.push_back(c);
-    return maybe_flush();
-  }
-  TextOut& real(double v) {
-    char tmp[64];
-    const auto r =
-        std::to_chars(tmp, tmp + sizeof(tmp), v, std::chars_format::general, kDoubleDigits);
-    buffer_.append(tmp, r.ptr);
-    return maybe_flush();
-  }
-  TextOut& integer(long long v) {
-    char tmp[32];
-    const auto r = std::to_chars(tmp, tmp + sizeof(tmp), v);
-    buffer_.append(tmp, r.ptr);
-    return maybe_flush();
-  }
-  TextOut& point(const Vec3d& p) { return real(p.x).ch(' ').real(p.y).ch(' ').real(p.z); }
-  /// Writes everything buffered to the stream.
-  void flush() {
-    os_.write(buffer_.data(), static_cast<std::streamsize>(buffer_.size()));
-    buffer_.clear();
-  }
-
- private:
-  static constexpr std::size_t kChunk = 1 << 16;
-  TextOut& maybe_flush() {
-    if (buffer_.size() >= kChunk) flush();
-    return *this;
-  }
-  std::ostream& os_;
-  std::string buffer_;
-};
+constexpr int kVtkTetra = 10;  // VTK_TETRA
 
 std::string join(const std::vector<std::string>& items) {
   std::string s;
@@ -108,6 +59,7 @@ void check_tet_mesh(const TetMesh& mesh) {
   check_size(mesh.source_triangle.size(), nt, "source_triangle");
   check_size(mesh.inner.size(), np, "inner");
   check_size(mesh.thickness.size(), np, "thickness");
+  check_size(mesh.surface_vertex.size(), np, "surface_vertex");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -129,7 +81,15 @@ void vtu_data_array(TextOut& out, const char* type, const char* name, const Valu
   out.str("        </DataArray>\n");
 }
 
-void write_vtu(std::ostream& os, const TetMesh& mesh) {
+/// Per tet: a bit mask of its faces tagged `tag` (bit k: the face opposite corner k).
+std::vector<std::uint8_t> face_mask(const TetMesh& mesh, const TaggedBoundary& boundary, int tag) {
+  std::vector<std::uint8_t> mask(mesh.tets.size(), 0);
+  for (std::size_t f = 0; f < boundary.faces.size(); ++f)
+    if (boundary.tag[f] == tag) mask[boundary.tet[f]] |= std::uint8_t(1u << boundary.local[f]);
+  return mask;
+}
+
+void write_vtu(std::ostream& os, const TetMesh& mesh, const TaggedBoundary& boundary) {
   TextOut out(os);
   const auto as_real = [&out](double v) { out.real(v); };
   const auto as_int = [&out](auto v) { out.integer(static_cast<long long>(v)); };
@@ -143,22 +103,25 @@ void write_vtu(std::ostream& os, const TetMesh& mesh) {
       .str("\" NumberOfCells=\"")
       .integer(static_cast<long long>(mesh.tets.size()))
       .str("\">\n");
-  if (!mesh.inner.empty() || !mesh.thickness.empty()) {
+  if (!mesh.inner.empty() || !mesh.thickness.empty() || !mesh.surface_vertex.empty()) {
     out.str("      <PointData>\n");
     if (!mesh.inner.empty()) vtu_data_array(out, "UInt8", "inner", mesh.inner, as_int);
     if (!mesh.thickness.empty()) {
       vtu_data_array(out, "Float64", "thickness", mesh.thickness, as_real);
     }
+    if (!mesh.surface_vertex.empty()) {
+      vtu_data_array(out, "Int64", "surface_vertex", mesh.surface_vertex, as_int);
+    }
     out.str("      </PointData>\n");
   }
-  if (!mesh.quality.empty() || !mesh.source_triangle.empty()) {
-    out.str("      <CellData>\n");
-    if (!mesh.quality.empty()) vtu_data_array(out, "Float64", "quality", mesh.quality, as_real);
-    if (!mesh.source_triangle.empty()) {
-      vtu_data_array(out, "Int64", "source_triangle", mesh.source_triangle, as_int);
-    }
-    out.str("      </CellData>\n");
+  out.str("      <CellData>\n");
+  if (!mesh.quality.empty()) vtu_data_array(out, "Float64", "quality", mesh.quality, as_real);
+  if (!mesh.source_triangle.empty()) {
+    vtu_data_array(out, "Int64", "source_triangle", mesh.source_triangle, as_int);
   }
+  vtu_data_array(out, "UInt8", "outer_faces", face_mask(mesh, boundary, kOuterTag), as_int);
+  vtu_data_array(out, "UInt8", "inner_faces", face_mask(mesh, boundary, kInnerTag), as_int);
+  out.str("      </CellData>\n");
   out.str(
       "      <Points>\n"
       "        <DataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\" "
@@ -206,17 +169,20 @@ void write_vtu(std::ostream& os, const TetMesh& mesh) {
 // ---------------------------------------------------------------------------------------------
 // Legacy VTK (.vtk)
 
+/// One array of a FIELD section: VTK's legacy reader loads every array of a FIELD, where it
+/// keeps only the first of several SCALARS.
 template <typename Values, typename Emit>
-void vtk_scalars(TextOut& out, const char* name, const char* type, const Values& values,
-                 Emit emit) {
-  out.str("SCALARS ").str(name).ch(' ').str(type).str(" 1\nLOOKUP_TABLE default\n");
+void vtk_field_array(TextOut& out, const char* name, const char* type, const Values& values,
+                     Emit emit) {
+  out.str(name).str(" 1 ").integer(static_cast<long long>(values.size())).ch(' ').str(type);
+  out.ch('\n');
   for (const auto& v : values) {
     emit(v);
     out.ch('\n');
   }
 }
 
-void write_vtk(std::ostream& os, const TetMesh& mesh) {
+void write_vtk(std::ostream& os, const TetMesh& mesh, const TaggedBoundary& boundary) {
   TextOut out(os);
   const auto as_real = [&out](double v) { out.real(v); };
   const auto as_int = [&out](auto v) { out.integer(static_cast<long long>(v)); };
@@ -243,143 +209,52 @@ void write_vtk(std::ostream& os, const TetMesh& mesh) {
   }
   out.str("CELL_TYPES ").integer(nt).ch('\n');
   for (long long i = 0; i < nt; ++i) out.integer(kVtkTetra).ch('\n');
-  if (!mesh.quality.empty() || !mesh.source_triangle.empty()) {
-    out.str("CELL_DATA ").integer(nt).ch('\n');
-    if (!mesh.quality.empty()) vtk_scalars(out, "quality", "double", mesh.quality, as_real);
-    if (!mesh.source_triangle.empty()) {
-      vtk_scalars(out, "source_triangle", "long", mesh.source_triangle, as_int);
-    }
-  }
-  if (!mesh.inner.empty() || !mesh.thickness.empty()) {
-    out.str("POINT_DATA ").integer(np).ch('\n');
-    if (!mesh.inner.empty()) vtk_scalars(out, "inner", "unsigned_char", mesh.inner, as_int);
-    if (!mesh.thickness.empty()) {
-      vtk_scalars(out, "thickness", "double", mesh.thickness, as_real);
-    }
-  }
-  out.flush();
-}
-
-// ---------------------------------------------------------------------------------------------
-// Gmsh (.msh 4.1 and 2.2)
-
-/// $NodeData / $ElementData block (the same in MSH 2.2 and 4.1): one scalar per node/element,
-/// tags 1-based.
-template <typename Values, typename Emit>
-void msh_data(TextOut& out, const char* section, const char* name, const Values& values,
-              Emit emit) {
-  out.ch('$').str(section).ch('\n');
-  out.str("1\n\"").str(name).str("\"\n");  // one string tag: the name
-  out.str("1\n0\n");                       // one real tag: the time
-  out.str("3\n0\n1\n").integer(static_cast<long long>(values.size())).ch('\n');  // step, 1 comp
-  for (std::size_t i = 0; i < values.size(); ++i) {
-    out.integer(static_cast<long long>(i + 1)).ch(' ');
-    emit(values[i]);
-    out.ch('\n');
-  }
-  out.str("$End").str(section).ch('\n');
-}
-
-void msh_all_data(TextOut& out, const TetMesh& mesh) {
-  const auto as_real = [&out](double v) { out.real(v); };
-  const auto as_int = [&out](auto v) { out.integer(static_cast<long long>(v)); };
-  if (!mesh.inner.empty()) msh_data(out, "NodeData", "inner", mesh.inner, as_int);
-  if (!mesh.thickness.empty()) msh_data(out, "NodeData", "thickness", mesh.thickness, as_real);
-  if (!mesh.quality.empty()) msh_data(out, "ElementData", "quality", mesh.quality, as_real);
+  out.str("CELL_DATA ").integer(nt).ch('\n');
+  out.str("FIELD cell_data ")
+      .integer(2 + !mesh.quality.empty() + !mesh.source_triangle.empty())
+      .ch('\n');
+  if (!mesh.quality.empty()) vtk_field_array(out, "quality", "double", mesh.quality, as_real);
   if (!mesh.source_triangle.empty()) {
-    msh_data(out, "ElementData", "source_triangle", mesh.source_triangle, as_int);
+    vtk_field_array(out, "source_triangle", "long", mesh.source_triangle, as_int);
   }
-}
-
-void msh_physical_names(TextOut& out) {
-  out.str("$PhysicalNames\n1\n3 ").integer(kGmshVolumeTag).str(" \"shell\"\n$EndPhysicalNames\n");
-}
-
-void write_msh41(std::ostream& os, const TetMesh& mesh) {
-  TextOut out(os);
-  const auto np = static_cast<long long>(mesh.points.size());
-  const auto nt = static_cast<long long>(mesh.tets.size());
-  out.str("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n");
-  msh_physical_names(out);
-  // One volume entity holding every node and element, in physical group 1.
-  BBox box;
-  for (const Vec3d& p : mesh.points) box.expand(p);
-  if (box.empty()) box = BBox{Vec3d{}, Vec3d{}};
-  out.str("$Entities\n0 0 0 1\n")
-      .integer(kGmshVolumeTag)
-      .ch(' ')
-      .point(box.lo)
-      .ch(' ')
-      .point(box.hi)
-      .str(" 1 ")
-      .integer(kGmshVolumeTag)
-      .str(" 0\n$EndEntities\n");
-  out.str("$Nodes\n");
-  if (np == 0) {
-    out.str("0 0 0 0\n");
-  } else {
-    out.str("1 ").integer(np).str(" 1 ").integer(np).ch('\n');
-    out.str("3 ").integer(kGmshVolumeTag).str(" 0 ").integer(np).ch('\n');
-    for (long long i = 1; i <= np; ++i) out.integer(i).ch('\n');
-    for (const Vec3d& p : mesh.points) out.point(p).ch('\n');
-  }
-  out.str("$EndNodes\n$Elements\n");
-  if (nt == 0) {
-    out.str("0 0 0 0\n");
-  } else {
-    out.str("1 ").integer(nt).str(" 1 ").integer(nt).ch('\n');
-    out.str("3 ").integer(kGmshVolumeTag).ch(' ').integer(kGmshTetra).ch(' ').integer(nt).ch('\n');
-    long long tag = 1;
-    for (const Tet& t : mesh.tets) {
-      out.integer(tag++);
-      for (std::uint32_t v : t) out.ch(' ').integer(static_cast<long long>(v) + 1);
-      out.ch('\n');
+  vtk_field_array(out, "outer_faces", "unsigned_char", face_mask(mesh, boundary, kOuterTag),
+                  as_int);
+  vtk_field_array(out, "inner_faces", "unsigned_char", face_mask(mesh, boundary, kInnerTag),
+                  as_int);
+  const int point_arrays =
+      !mesh.inner.empty() + !mesh.thickness.empty() + !mesh.surface_vertex.empty();
+  if (point_arrays > 0) {
+    out.str("POINT_DATA ").integer(np).ch('\n');
+    out.str("FIELD point_data ").integer(point_arrays).ch('\n');
+    if (!mesh.inner.empty()) vtk_field_array(out, "inner", "unsigned_char", mesh.inner, as_int);
+    if (!mesh.thickness.empty()) {
+      vtk_field_array(out, "thickness", "double", mesh.thickness, as_real);
+    }
+    if (!mesh.surface_vertex.empty()) {
+      vtk_field_array(out, "surface_vertex", "long", mesh.surface_vertex, as_int);
     }
   }
-  out.str("$EndElements\n");
-  msh_all_data(out, mesh);
-  out.flush();
-}
-
-void write_msh22(std::ostream& os, const TetMesh& mesh) {
-  TextOut out(os);
-  out.str("$MeshFormat\n2.2 0 8\n$EndMeshFormat\n");
-  msh_physical_names(out);
-  out.str("$Nodes\n").integer(static_cast<long long>(mesh.points.size())).ch('\n');
-  long long tag = 1;
-  for (const Vec3d& p : mesh.points) out.integer(tag++).ch(' ').point(p).ch('\n');
-  out.str("$EndNodes\n$Elements\n").integer(static_cast<long long>(mesh.tets.size())).ch('\n');
-  tag = 1;
-  for (const Tet& t : mesh.tets) {
-    // number, type, 2 tags (physical group, elementary entity), nodes
-    out.integer(tag++)
-        .ch(' ')
-        .integer(kGmshTetra)
-        .str(" 2 ")
-        .integer(kGmshVolumeTag)
-        .ch(' ')
-        .integer(kGmshVolumeTag);
-    for (std::uint32_t v : t) out.ch(' ').integer(static_cast<long long>(v) + 1);
-    out.ch('\n');
-  }
-  out.str("$EndElements\n");
-  msh_all_data(out, mesh);
   out.flush();
 }
 
 // ---------------------------------------------------------------------------------------------
 // Medit (.mesh)
 
-void write_medit(std::ostream& os, const TetMesh& mesh) {
+void write_medit(std::ostream& os, const TetMesh& mesh, const TaggedBoundary& boundary) {
   TextOut out(os);
   out.str("MeshVersionFormatted 2\n\nDimension 3\n\nVertices\n")
       .integer(static_cast<long long>(mesh.points.size()))
       .ch('\n');
   for (const Vec3d& p : mesh.points) out.point(p).str(" 0\n");
+  out.str("\nTriangles\n").integer(static_cast<long long>(boundary.faces.size())).ch('\n');
+  for (std::size_t f = 0; f < boundary.faces.size(); ++f) {
+    for (std::uint32_t v : boundary.faces[f]) out.integer(static_cast<long long>(v) + 1).ch(' ');
+    out.integer(boundary.tag[f]).ch('\n');
+  }
   out.str("\nTetrahedra\n").integer(static_cast<long long>(mesh.tets.size())).ch('\n');
   for (const Tet& t : mesh.tets) {
     for (std::uint32_t v : t) out.integer(static_cast<long long>(v) + 1).ch(' ');
-    out.str("1\n");
+    out.integer(kShellTag).ch('\n');
   }
   out.str("\nEnd\n");
   out.flush();
@@ -408,14 +283,13 @@ void write_tetgen_ele(std::ostream& os, const TetMesh& mesh) {
   out.flush();
 }
 
-void write_tetgen_face(std::ostream& os, const std::vector<Triangle>& faces) {
+void write_tetgen_face(std::ostream& os, const TaggedBoundary& boundary) {
   TextOut out(os);
-  out.integer(static_cast<long long>(faces.size())).str(" 0\n");
-  long long index = 1;
-  for (const Triangle& f : faces) {
-    out.integer(index++);
-    for (std::uint32_t v : f) out.ch(' ').integer(static_cast<long long>(v) + 1);
-    out.ch('\n');
+  out.integer(static_cast<long long>(boundary.faces.size())).str(" 1\n");  // with markers
+  for (std::size_t f = 0; f < boundary.faces.size(); ++f) {
+    out.integer(static_cast<long long>(f + 1));
+    for (std::uint32_t v : boundary.faces[f]) out.ch(' ').integer(static_cast<long long>(v) + 1);
+    out.ch(' ').integer(boundary.tag[f]).ch('\n');
   }
   out.flush();
 }
@@ -427,15 +301,14 @@ std::string tetgen_stem(const std::string& path) {
   return tetgen ? path.substr(0, path.size() - ext.size()) : path;
 }
 
-void write_tetgen(const std::string& path, const TetMesh& mesh) {
+void write_tetgen(const std::string& path, const TetMesh& mesh, const TaggedBoundary& boundary) {
   const std::string stem = tetgen_stem(path);
-  const std::vector<Triangle> faces = tet_boundary_faces(mesh);
   AtomicFile node(stem + ".node");
   AtomicFile ele(stem + ".ele");
   AtomicFile face(stem + ".face");
   write_tetgen_node(node.stream(), mesh);
   write_tetgen_ele(ele.stream(), mesh);
-  write_tetgen_face(face.stream(), faces);
+  write_tetgen_face(face.stream(), boundary);
   // All three complete before any replaces its target.
   node.finish();
   ele.finish();
@@ -524,7 +397,7 @@ TetFormat tet_format_from_path(const std::string& path, int msh_version) {
                    " (.ele writes the TetGen .node/.ele/.face triple)");
 }
 
-std::vector<Triangle> tet_boundary_faces(const TetMesh& mesh) {
+TaggedBoundary tagged_boundary(const TetMesh& mesh) {
   // A face no other tet shares is a boundary face; listed in (tet, local face) order.
   const std::vector<FaceRecord> sorted = sorted_tet_faces(mesh);
   std::vector<std::uint8_t> boundary(sorted.size(), 0);
@@ -534,37 +407,45 @@ std::vector<Triangle> tet_boundary_faces(const TetMesh& mesh) {
     if (j - i == 1) boundary[4 * std::size_t(sorted[i].tet) + sorted[i].face] = 1;
     i = j;
   }
-  std::vector<Triangle> faces;
+  TaggedBoundary out;
   for (std::size_t slot = 0; slot < boundary.size(); ++slot) {
     if (!boundary[slot]) continue;
     const Tet& tet = mesh.tets[slot / 4];
     const int* f = kTetOutwardFace[slot % 4];
-    faces.push_back({tet[f[0]], tet[f[1]], tet[f[2]]});
+    const Triangle face = {tet[f[0]], tet[f[1]], tet[f[2]]};
+    const bool inner =
+        !mesh.inner.empty() && (mesh.inner[face[0]] || mesh.inner[face[1]] || mesh.inner[face[2]]);
+    out.faces.push_back(face);
+    out.tag.push_back(inner ? kInnerTag : kOuterTag);
+    out.tet.push_back(static_cast<std::uint32_t>(slot / 4));
+    out.local.push_back(static_cast<std::uint8_t>(slot % 4));
   }
-  return faces;
+  return out;
+}
+
+std::vector<Triangle> tet_boundary_faces(const TetMesh& mesh) {
+  return tagged_boundary(mesh).faces;
 }
 
 void write_tet_mesh(const std::string& path, const TetMesh& mesh, TetFormat format) {
   check_tet_mesh(mesh);
+  const TaggedBoundary boundary = tagged_boundary(mesh);
+  const auto to = [&](auto writer) {
+    write_file_atomically(path, [&](std::ostream& os) { writer(os, mesh, boundary); });
+  };
   switch (format) {
     case TetFormat::Vtu:
-      write_file_atomically(path, [&](std::ostream& os) { write_vtu(os, mesh); });
-      return;
+      return to(write_vtu);
     case TetFormat::Vtk:
-      write_file_atomically(path, [&](std::ostream& os) { write_vtk(os, mesh); });
-      return;
+      return to(write_vtk);
     case TetFormat::Msh41:
-      write_file_atomically(path, [&](std::ostream& os) { write_msh41(os, mesh); });
-      return;
+      return to(write_msh41);
     case TetFormat::Msh22:
-      write_file_atomically(path, [&](std::ostream& os) { write_msh22(os, mesh); });
-      return;
+      return to(write_msh22);
     case TetFormat::Medit:
-      write_file_atomically(path, [&](std::ostream& os) { write_medit(os, mesh); });
-      return;
+      return to(write_medit);
     case TetFormat::TetGen:
-      write_tetgen(path, mesh);
-      return;
+      return write_tetgen(path, mesh, boundary);
   }
   throw InternalError("write_tet_mesh: unknown TetFormat value");
 }

@@ -28,11 +28,30 @@ namespace vdb_shell {
 enum class TetFormat {
   Vtu,    ///< VTK XML UnstructuredGrid (.vtu), ASCII
   Vtk,    ///< legacy VTK UNSTRUCTURED_GRID (.vtk), ASCII, version 4.2
-  Msh41,  ///< Gmsh MSH 4.1 (.msh), ASCII, one volume entity
+  Msh41,  ///< Gmsh MSH 4.1 (.msh), ASCII: one volume and two surface entities
   Msh22,  ///< Gmsh MSH 2.2 (.msh), ASCII
   Medit,  ///< Medit / INRIA (.mesh), MeshVersionFormatted 2 (double precision)
   TetGen  ///< TetGen X.node + X.ele + X.face, 1-based
 };
+
+/// Boundary tags, as every format carries them (Gmsh physical groups, Medit refs, TetGen boundary
+/// markers): the outer surface, the inner boundary, the tets.
+constexpr int kOuterTag = 1;
+constexpr int kInnerTag = 2;
+constexpr int kShellTag = 3;
+
+/// The boundary of a shell, tagged: the faces of exactly one tet (tet_boundary_faces()), each
+/// kOuterTag when none of its corners is an inner point (TetMesh::inner; every such face of a
+/// shell is an input triangle: every other face has an inner corner) and kInnerTag otherwise
+/// (the inner surface, and the sides of a shell that ends at the surface). Without `inner` data
+/// every face is outer.
+struct TaggedBoundary {
+  std::vector<Triangle> faces;      ///< oriented out of the mesh
+  std::vector<std::uint8_t> tag;    ///< kOuterTag or kInnerTag, per face
+  std::vector<std::uint32_t> tet;   ///< per face: its tet
+  std::vector<std::uint8_t> local;  ///< per face: the corner of its tet opposite it (0-3)
+};
+TaggedBoundary tagged_boundary(const TetMesh& mesh);
 
 /// Extensions tet_format_from_path() accepts (lower case, with the dot).
 const std::vector<std::string>& tet_mesh_extensions();
@@ -46,9 +65,13 @@ TetFormat tet_format_from_path(const std::string& path, int msh_version = 41);
 /// Writes `mesh` to `path` in `format`.
 ///
 /// Optional data is written when present (non-empty): per tet `quality` (Float64) and
-/// `source_triangle` (Int64), per point `inner` (UInt8) and `thickness` (Float64, world units) —
-/// as cell/point data in .vtu and .vtk, as $ElementData/$NodeData in .msh. Medit and TetGen files
-/// hold geometry only.
+/// `source_triangle` (Int64), per point `inner` (UInt8), `thickness` (Float64, world units) and
+/// `surface_vertex` (Int64) — as cell/point data in .vtu and .vtk (legacy: FIELD arrays), as
+/// $ElementData (4.1 only) / $NodeData in .msh. The boundary (tagged_boundary()) is written in
+/// every format: .msh triangles in physical surfaces "outer" (1) and "inner" (2) with the tets
+/// in physical volume "shell" (3); Medit Triangles with refs 1/2 and tets with ref 3; the TetGen
+/// .face with boundary markers 1/2; .vtu/.vtk per-tet bit masks `outer_faces` and `inner_faces`
+/// (bit k: the face opposite corner k).
 ///
 /// For TetFormat::TetGen, `path` names the .ele file (X.ele, or X.node, or the stem X); the
 /// three files X.node, X.ele and X.face are written beside each other.

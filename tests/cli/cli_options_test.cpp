@@ -200,11 +200,19 @@ TEST_F(CliOptionEffects, QuietPrintsOnlyErrors) {
 }
 
 TEST_F(CliOptionEffects, MshVersionPicksTheGmshFormat) {
-  const std::string v41 = file("s41.msh"), v22 = file("s22.msh");
-  ASSERT_EQ(cli({star(), "-o", v41, "-r", "32", "-q"}).code, 0);
-  ASSERT_EQ(cli({star(), "-o", v22, "-r", "32", "-q", "--msh-version", "22"}).code, 0);
-  EXPECT_EQ(test::read_text(v41).rfind("$MeshFormat\n4.1 0 8\n", 0), 0u);
-  EXPECT_EQ(test::read_text(v22).rfind("$MeshFormat\n2.2 0 8\n", 0), 0u);
+  // The default is 4.1; versions are accepted as users write them, 2.2 and 4.1, or 22 and 41.
+  ASSERT_EQ(cli({star(), "-o", file("d.msh"), "-r", "32", "-q"}).code, 0);
+  EXPECT_EQ(test::read_text(file("d.msh")).rfind("$MeshFormat\n4.1 0 8\n", 0), 0u);
+  for (const auto& [given, header] : std::vector<std::pair<std::string, std::string>>{
+           {"2.2", "2.2"}, {"22", "2.2"}, {"4.1", "4.1"}, {"41", "4.1"}}) {
+    const std::string path = file("s" + given + ".msh");
+    ASSERT_EQ(cli({star(), "-o", path, "-r", "32", "-q", "--msh-version", given}).code, 0);
+    EXPECT_EQ(test::read_text(path).rfind("$MeshFormat\n" + header + " 0 8\n", 0), 0u) << given;
+  }
+  const CliRun bad = cli({star(), "-o", file("b.msh"), "-r", "32", "--msh-version", "3"});
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.err.find("must be 4.1 or 2.2"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(file("b.msh")));
 }
 
 TEST_F(CliOptionEffects, MaxMemoryRefusesTheFieldBuild) {

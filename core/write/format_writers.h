@@ -1,0 +1,14 @@
+// format_writers.h — the tet-mesh formats written in their own files (internal to core/write;
+// write_tet_mesh() in shell_writers.h is the public entry).
+#pragma once
+
+#include <ostream>
+
+#include "core/write/shell_writers.h"
+
+namespace vdb_shell {
+
+void write_msh41(std::ostream& os, const TetMesh& mesh, const TaggedBoundary& boundary);
+void write_msh22(std::ostream& os, const TetMesh& mesh, const TaggedBoundary& boundary);
+
+}  // namespace vdb_shell
