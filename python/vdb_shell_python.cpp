@@ -252,7 +252,7 @@ py::array_t<std::int64_t> int64_values(const std::vector<std::uint32_t>& values)
 /// The Python view of a ShellResult: arrays made once, the C++ result kept for the writers.
 struct PyShellResult {
   std::shared_ptr<const ShellResult> result;
-  py::array points, tets, source_triangle, quality, inner, thickness;
+  py::array points, tets, source_triangle, quality, inner, thickness, surface_vertex;
   py::array inner_vertices, inner_faces;
   py::object report;
   py::list notices;
@@ -263,6 +263,7 @@ struct PyShellResult {
         view(result, reinterpret_cast<const double*>(mesh.points.data()), mesh.points.size(), 3);
     tets = int64_rows(mesh.tets);
     source_triangle = int64_values(mesh.source_triangle);
+    surface_vertex = int64_values(mesh.surface_vertex);
     quality = view(result, mesh.quality.data(), mesh.quality.size(), 0);
     thickness = view(result, mesh.thickness.data(), mesh.thickness.size(), 0);
     py::array_t<bool> in(static_cast<py::ssize_t>(mesh.inner.size()));
@@ -273,7 +274,8 @@ struct PyShellResult {
     inner_vertices =
         view(result, reinterpret_cast<const double*>(s.points.data()), s.points.size(), 3);
     inner_faces = int64_rows(s.triangles);
-    for (py::array* a : {&tets, &source_triangle, &inner, &inner_faces}) make_read_only(*a);
+    for (py::array* a : {&tets, &source_triangle, &surface_vertex, &inner, &inner_faces})
+      make_read_only(*a);
     report = py::module_::import("json").attr("loads")(report_json(*result));
     for (const std::string& n : result->notices) notices.append(n);
   }
@@ -398,6 +400,9 @@ PYBIND11_MODULE(vdb_shell, m) {
       .def_readonly("thickness", &PyShellResult::thickness,
                     "(p,) float64: per inner point, its distance to the farthest surface "
                     "vertex whose inner vertex it is (input units); 0 on the surface")
+      .def_readonly("surface_vertex", &PyShellResult::surface_vertex,
+                    "(p,) int64: per point, its surface vertex (itself on the surface; for an "
+                    "inner point the smallest surface vertex whose inner vertex it is)")
       .def_readonly("inner_vertices", &PyShellResult::inner_vertices,
                     "(q, 3) float64: vertices of the inner surface")
       .def_readonly("inner_faces", &PyShellResult::inner_faces,

@@ -102,6 +102,13 @@ def check_shell(vertices, faces, result):
     assert not result.inner[:n].any() and result.inner[n:].all()
     assert result.thickness.shape == (len(points),) and np.all(result.thickness[n:] >= 0)
     assert np.all(result.thickness[:n] == 0)
+    # Every point's surface vertex: itself on the surface; for an inner point one of the surface
+    # vertices ending there, so no farther from it than its thickness (the farthest one's).
+    owner = result.surface_vertex
+    assert owner.shape == (len(points),) and np.all(owner[:n] == np.arange(n))
+    assert np.all(owner[n:] < n)
+    reach = np.linalg.norm(points[n:] - points[owner[n:]], axis=1)
+    assert np.all(reach <= result.thickness[n:] * (1 + 1e-12) + 1e-15)
     assert result.inner_faces.shape == (m, 3)
     assert result.inner_faces.max() < len(result.inner_vertices)
 

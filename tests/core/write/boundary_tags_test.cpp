@@ -226,7 +226,7 @@ TEST(BoundaryTags, VtkFilesShowEveryArrayAndTheFaceMasks) {
       EXPECT_EQ(bits, faces) << name;
     }
     // Each point's surface vertex: itself on the surface; for an inner point a corner of the
-    // input triangle of every tet it is in.
+    // input triangle of every tet it is in (this shell welds no inner vertices).
     const std::vector<double>& owner = r.point_data["surface_vertex"];
     ASSERT_EQ(owner.size(), mesh.points.size());
     const std::size_t n = e.shell.surface.points.size();
