@@ -230,6 +230,7 @@ TEST(BoundaryTags, VtkFilesShowEveryArrayAndTheFaceMasks) {
     const std::vector<double>& owner = r.point_data["surface_vertex"];
     ASSERT_EQ(owner.size(), mesh.points.size());
     const std::size_t n = e.shell.surface.points.size();
+    ASSERT_EQ(e.shell.counts.welded_vertices, 0u);
     for (std::size_t v = 0; v < n; ++v) EXPECT_EQ(owner[v], double(v));
     for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
       const Triangle& source = e.shell.surface.triangles[mesh.source_triangle[t]];
