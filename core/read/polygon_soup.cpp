@@ -8,6 +8,8 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -215,6 +217,127 @@ AsciiVertices scan_ascii_vertices(const std::string& path, const std::string& ex
   return out;
 }
 
+/// The integer at the start of `text` (after blanks), or false when there is none or it does not
+/// fit a long long.
+bool leading_integer(const char*& text, long long& value) {
+  while (*text == ' ' || *text == '\t' || *text == '\r') ++text;
+  char* end = nullptr;
+  errno = 0;
+  value = std::strtoll(text, &end, 10);
+  if (end == text || errno == ERANGE) return false;
+  text = end;
+  return true;
+}
+
+/// The words of `line` before a '#', at most `max` of them.
+std::vector<std::string> words(const std::string& line, std::size_t max = SIZE_MAX) {
+  std::istringstream in(line.substr(0, line.find('#')));
+  std::vector<std::string> out;
+  for (std::string w; out.size() < max && in >> w;) out.push_back(w);
+  return out;
+}
+
+/// An ASCII OFF file's counts and face lines against the file itself, before OpenMesh (which
+/// reserves what the header announces) reads it: counts that are numbers >= 0 and fit the file
+/// (at least 6 bytes a vertex, 4 a face), every announced line present, every face line with
+/// the corners it announces. Throws InputError naming the line.
+void check_off_structure(const std::string& path, std::uintmax_t size) {
+  std::ifstream in(path);
+  std::string line;
+  std::size_t line_no = 0;
+  const auto fail = [&](const std::string& what) {
+    throw InputError(path + ": " + what + " — fix: re-export the mesh (a complete OFF file)");
+  };
+  // The header: the keyword, then the counts (on its line or the next ones).
+  std::vector<std::string> header;
+  while (header.size() < 3 && std::getline(in, line)) {
+    ++line_no;
+    for (const std::string& w : words(line)) header.push_back(w);
+    if (!header.empty() && header[0].find("OFF") == std::string::npos)
+      fail("not an OFF file: line 1 starts with '" + header[0].substr(0, 20) + "'");
+    if (line.find("BINARY") != std::string::npos) return;  // binary counts: OpenMesh's checks
+  }
+  if (header.size() < 3)
+    fail("truncated: the header has no vertex and face counts (line " + std::to_string(line_no) +
+         ")");
+  long long count[2] = {0, 0};
+  for (int k = 0; k < 2; ++k) {
+    const char* text = header[1 + k].c_str();
+    if (!leading_integer(text, count[k]) || *text != '\0' || count[k] < 0)
+      fail(std::string("the header's ") + (k ? "face" : "vertex") + " count '" +
+           header[1 + k].substr(0, 24) + "' (line " + std::to_string(line_no) +
+           ") is not a number of elements >= 0");
+  }
+  const long long nv = count[0], nf = count[1];
+  const long double least = 6.0L * nv + 4.0L * nf;  // "0 0 0\n" per vertex, "3 0 1 2" per face
+  if (least > static_cast<long double>(size))
+    fail("truncated: the header (line " + std::to_string(line_no) + ") announces " +
+         std::to_string(nv) + " vertices and " + std::to_string(nf) +
+         " faces, more than the file's " + std::to_string(size) + " bytes can hold");
+  const auto next_line = [&](const char* what, long long index, long long total) {
+    while (std::getline(in, line)) {
+      ++line_no;
+      if (!words(line, 1).empty()) return;
+    }
+    fail("truncated: the header announces " + std::to_string(total) + " " + what +
+         ", the file ends after " + std::to_string(index));
+  };
+  for (long long v = 0; v < nv; ++v) next_line("vertices", v, nv);
+  for (long long f = 0; f < nf; ++f) {
+    next_line("faces", f, nf);
+    const std::vector<std::string> w = words(line);
+    const char* text = w[0].c_str();
+    long long corners = 0;
+    if (!leading_integer(text, corners) || corners < 0 ||
+        corners > static_cast<long long>(w.size()) - 1)
+      fail("face " + std::to_string(f) + " (line " + std::to_string(line_no) + ") announces '" +
+           w[0].substr(0, 24) + "' corners but lists " + std::to_string(w.size() - 1) + " numbers");
+  }
+}
+
+/// Every face index of an OBJ file in range: 1..n, or -1..-(vertices so far), n the file's
+/// vertex count (OpenMesh drops a face with a bad index without a word). Throws InputError
+/// naming the line.
+void check_obj_indices(const std::string& path) {
+  std::ifstream in(path);
+  std::string line;
+  const auto keyword = [&](const char* k) {  // the line starts with k and a blank
+    const std::size_t i = line.find_first_not_of(" \t");
+    const std::size_t n = std::strlen(k);
+    return i != std::string::npos && line.compare(i, n, k) == 0 && line.size() > i + n &&
+           (line[i + n] == ' ' || line[i + n] == '\t');
+  };
+  long long total = 0;
+  while (std::getline(in, line)) total += keyword("v");
+  in.clear();
+  in.seekg(0);
+  long long so_far = 0, face = 0;
+  std::size_t line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (keyword("v")) ++so_far;
+    if (!keyword("f")) continue;
+    const char* text = line.c_str() + line.find('f') + 1;
+    for (;;) {  // v, v/vt, v//vn or v/vt/vn: the vertex index comes first
+      while (*text == ' ' || *text == '\t' || *text == '\r') ++text;
+      if (*text == '\0' || *text == '#') break;
+      const char* word = text;
+      long long index = 0;
+      const bool number = leading_integer(text, index);
+      while (*text != '\0' && *text != ' ' && *text != '\t' && *text != '\r') ++text;
+      if (number && ((index > 0 && index <= total) || (index < 0 && -index <= so_far))) continue;
+      throw InputError(
+          path + ": face " + std::to_string(face) + " (line " + std::to_string(line_no) +
+          "): out-of-range vertex index '" +
+          std::string(word, static_cast<std::size_t>(std::min<std::ptrdiff_t>(text - word, 24))) +
+          "' (the file has " + std::to_string(total) +
+          " vertices, numbered from 1, or back from -1) — fix: the file is corrupt "
+          "or truncated; re-export the mesh");
+    }
+    ++face;
+  }
+}
+
 }  // namespace
 
 const std::vector<std::string>& supported_surface_extensions() {
@@ -243,6 +366,8 @@ PolygonSoup read_polygon_soup(const std::string& path) {
     const std::string problem = check_stl_size(path, size);
     if (!problem.empty()) throw InputError(path + ": " + problem);
   }
+  if (ext == ".off") check_off_structure(path, size);
+  if (ext == ".obj") check_obj_indices(path);
 
   PolygonSoup soup;
   SoupImporter importer(soup);

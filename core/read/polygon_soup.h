@@ -3,7 +3,12 @@
 // The reader returns the file's content untouched — positions and polygons with their indices as
 // written — so that validation (load_surface.h) can name every problem instead of OpenMesh silently
 // repairing or dropping faces. OpenMesh's parsers do the reading; its diagnostics are captured and
-// appended to the error message instead of being printed.
+// appended to the error message instead of being printed. Before them, what OpenMesh would trust
+// is checked against the file: a binary STL's triangle count against its size; an ASCII OFF's
+// counts (numbers >= 0 that the file's bytes can hold), its vertex and face lines (present, each
+// face with the corners it announces); an OBJ's face indices (in range: OpenMesh drops a face
+// with a bad index without a word). So no reader allocates more than a small multiple of the
+// file's size, and each problem is bad input naming its line.
 #pragma once
 
 #include <cstdint>

@@ -291,6 +291,41 @@ TEST(Readers, BinaryStlAndTruncatedBinaryStl) {
   EXPECT_TRUE(contains(e, "truncated")) << e;
 }
 
+TEST(Readers, HostileOffAndObjFilesAreBadInputNamingTheLine) {
+  // Headers and face lines that announce more than the file holds: refused before anything is
+  // allocated for them (OpenMesh reserves what an OFF header announces), each naming the line.
+  const std::string tet_off = "OFF\n4 4 0\n0 0 0\n2 0 0\n0 2 0\n0 0 2\n";
+  const std::string tet_faces = "3 0 2 1\n3 0 1 3\n3 1 2 3\n3 2 0 3\n";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"OFF\n", "no vertex and face counts"},
+      {"OFF\n100000000 100000000 0\n", "more than the file's"},
+      {"OFF\n-5 -3 0\n", "vertex count '-5' (line 2)"},
+      {"OFF\n99999999999999999999 1 0\n", "is not a number of elements"},
+      {"OFF\n4 x 0\n", "face count 'x'"},
+      {tet_off + "2000000000 0 1 2\n3 0 1 3\n3 1 2 3\n3 2 0 3\n",
+       "face 0 (line 7) announces '2000000000' corners but lists 3"},
+      {tet_off + "3 0 2 1\n", "announces 4 faces, the file ends after 1"},
+      {"OFF\n4 4 0\n0 0 0\n2 0 0\n" + std::string(40, ' ') + "\n",
+       "announces 4 vertices, the file ends after 2"},
+  };
+  for (const auto& [text, want] : cases) {
+    const std::string e = load_error("hostile.off", text);
+    EXPECT_TRUE(contains(e, want)) << text << "\n-> " << e;
+    EXPECT_TRUE(contains(e, "hostile.off: ")) << e;
+  }
+  EXPECT_EQ(load_error("tet.off", tet_off + tet_faces), "");
+  // OBJ: an index past the vertices (or 0, or counting back too far) is named, not dropped.
+  for (const std::string bad : {"f 1 2 99999999999", "f 1 0 2", "f -1 -2 -9"}) {
+    const std::string e = load_error("bad.obj", cube_obj(-1, bad + "\n"));
+    EXPECT_TRUE(contains(e, "face 12 (line 21): out-of-range vertex index")) << bad << " -> " << e;
+  }
+  EXPECT_EQ(load_error("relative.obj", std::string(kCubeVertices) + "f -8 -6 -7\n" +
+                                           "f 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\n"
+                                           "f 2 3 7\nf 2 7 6\nf 3 4 8\nf 3 8 7\nf 4 1 5\n"
+                                           "f 4 5 8\n"),
+            "");
+}
+
 TEST(Readers, AsciiStlOffPlyAgree) {
   TempDir dir;
   write_text(dir.file("t.stl"),
