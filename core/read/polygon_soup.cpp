@@ -338,6 +338,123 @@ void check_obj_indices(const std::string& path) {
   }
 }
 
+/// The triangles of a PLY file's `tristrips` element (OpenMesh reads only `face`): each strip a
+/// list of vertex indices, -1 restarting it; triangle i of a strip is (s_i, s_i+1, s_i+2), every
+/// other one reversed to keep the orientation; triangles with a repeated index are skipped.
+/// ASCII and binary (either byte order). Empty when the file has no tristrips element.
+/// Throws InputError for a file that ends early or a type it does not know.
+std::vector<std::vector<std::int64_t>> read_ply_tristrips(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  struct Property {
+    std::string type, count_type;  ///< count_type: non-empty for a list
+  };
+  struct Element {
+    std::string name;
+    long long count = 0;
+    std::vector<Property> properties;
+  };
+  std::vector<Element> elements;
+  std::string line, format;
+  while (std::getline(in, line)) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    const std::vector<std::string> w = words(line);
+    if (w.empty()) continue;
+    if (w[0] == "end_header") break;
+    if (w[0] == "format" && w.size() > 1) format = w[1];
+    if (w[0] == "element" && w.size() > 2) elements.push_back({w[1], std::atoll(w[2].c_str()), {}});
+    if (w[0] == "property" && !elements.empty() && w.size() > 2)
+      elements.back().properties.push_back(w[1] == "list" && w.size() > 4 ? Property{w[3], w[2]}
+                                                                          : Property{w[1], ""});
+  }
+  std::vector<std::vector<std::int64_t>> triangles;
+  const auto strips = std::find_if(elements.begin(), elements.end(),
+                                   [](const Element& e) { return e.name == "tristrips"; });
+  if (strips == elements.end()) return triangles;
+  const auto fail = [&](const std::string& what) {
+    throw InputError(path + ": " + what + " (PLY element 'tristrips') — fix: re-export the mesh");
+  };
+  const auto size_of = [&](const std::string& t) -> int {
+    if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
+    if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
+    if (t == "int" || t == "uint" || t == "float" || t == "int32" || t == "uint32" ||
+        t == "float32")
+      return 4;
+    if (t == "double" || t == "float64") return 8;
+    fail("unknown property type '" + t.substr(0, 16) + "'");
+    return 0;
+  };
+  const bool ascii = format == "ascii";
+  const bool swap = format == "binary_big_endian";
+  // One binary value of type t as a double.
+  const auto binary = [&](const std::string& t) {
+    unsigned char b[8] = {};
+    const int n = size_of(t);
+    if (!in.read(reinterpret_cast<char*>(b), n)) fail("the file ends inside an element");
+    if (swap) std::reverse(b, b + n);
+    const bool is_signed = t[0] != 'u';
+    const bool real = t.find("float") == 0 || t == "double";
+    if (real) {
+      if (n == 4) {
+        float f;
+        std::memcpy(&f, b, 4);
+        return double(f);
+      }
+      double d;
+      std::memcpy(&d, b, 8);
+      return d;
+    }
+    std::uint64_t u = 0;
+    std::memcpy(&u, b, static_cast<std::size_t>(n));
+    if (is_signed && n < 8 && (u >> (8 * n - 1)) & 1) u |= ~std::uint64_t{0} << (8 * n);
+    return is_signed ? double(static_cast<std::int64_t>(u)) : double(u);
+  };
+  std::istringstream row;
+  const auto value = [&](const std::string& t) {
+    if (!ascii) return binary(t);
+    double v = 0;
+    if (!(row >> v)) fail("a line ends early");
+    return v;
+  };
+  for (const Element& e : elements) {
+    const bool wanted = &e == &*strips;
+    for (long long i = 0; i < e.count; ++i) {
+      if (ascii) {
+        do {
+          if (!std::getline(in, line)) fail("the file ends before its last element");
+        } while (words(line, 1).empty());
+        row.clear();
+        row.str(line);
+      }
+      for (const Property& p : e.properties) {
+        if (p.count_type.empty()) {
+          value(p.type);
+          continue;
+        }
+        const double n = value(p.count_type);
+        if (!(n >= 0) || n > 1e9) fail("a list announces " + std::to_string(n) + " entries");
+        std::vector<std::int64_t> strip;
+        const auto emit = [&] {  // the triangles of the strip so far
+          for (std::size_t k = 0; k + 2 < strip.size(); ++k) {
+            std::vector<std::int64_t> t = {strip[k], strip[k + 1], strip[k + 2]};
+            if (k % 2 == 1) std::swap(t[0], t[1]);
+            if (t[0] != t[1] && t[1] != t[2] && t[0] != t[2]) triangles.push_back(t);
+          }
+          strip.clear();
+        };
+        for (long long k = 0; k < static_cast<long long>(n); ++k) {
+          const auto v = static_cast<std::int64_t>(value(p.type));
+          if (!wanted) continue;
+          if (v >= 0) strip.push_back(v);
+          if (v < 0) emit();  // -1: the next strip starts
+        }
+        if (wanted) emit();
+      }
+    }
+    if (wanted) break;
+  }
+  return triangles;
+}
+
 }  // namespace
 
 const std::vector<std::string>& supported_surface_extensions() {
@@ -378,6 +495,10 @@ PolygonSoup read_polygon_soup(const std::string& path) {
     CaptureOpenMeshLog capture;
     ok = om::IO::IOManager().read(path, importer, opt);
     log = capture.text();
+  }
+  if (ok && ext == ".ply" && soup.polygons.empty()) {
+    soup.polygons = read_ply_tristrips(path);  // OpenMesh skips that element
+    if (!soup.polygons.empty()) log.clear();   // its complaint was about the tristrips
   }
   const std::string detail = log.empty() ? "" : " (OpenMesh: " + log + ")";
   if (!ok)

@@ -8,7 +8,8 @@
 // counts (numbers >= 0 that the file's bytes can hold), its vertex and face lines (present, each
 // face with the corners it announces); an OBJ's face indices (in range: OpenMesh drops a face
 // with a bad index without a word). So no reader allocates more than a small multiple of the
-// file's size, and each problem is bad input naming its line.
+// file's size, and each problem is bad input naming its line. A PLY file whose faces are
+// triangle strips (element `tristrips`, which OpenMesh skips) is decoded here.
 #pragma once
 
 #include <cstdint>

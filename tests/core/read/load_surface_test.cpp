@@ -3,6 +3,7 @@
 // mesh corpus classified as its README says.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -324,6 +325,42 @@ TEST(Readers, HostileOffAndObjFilesAreBadInputNamingTheLine) {
                                            "f 2 3 7\nf 2 7 6\nf 3 4 8\nf 3 8 7\nf 4 1 5\n"
                                            "f 4 5 8\n"),
             "");
+}
+
+TEST(Readers, PlyTriangleStripsAreRead) {
+  // A tetrahedron as one strip (0 2 1 3 0 2), in ASCII, and in big- and little-endian binary
+  // followed by a restart (-1) and a strip whose one triangle is degenerate (skipped).
+  const std::string head =
+      "ply\nformat FORMAT 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+      "property float z\nelement tristrips 1\nproperty list int int vertex_indices\n"
+      "end_header\n";
+  const auto with_format = [&](const std::string& format) {
+    std::string h = head;
+    h.replace(h.find("FORMAT"), 6, format);
+    return h;
+  };
+  const auto check = [&](const std::string& name, const std::string& text) {
+    TempDir dir;
+    write_text(dir.file(name), text);
+    const LoadedSurface s = load_surface(dir.file(name));
+    EXPECT_EQ(s.mesh.triangles.size(), 4u) << name;
+    EXPECT_NEAR(s.stats.enclosed_volume, 8.0 / 6.0, 1e-12) << name;
+    EXPECT_FALSE(s.flipped) << name;
+  };
+  check("ascii.ply", with_format("ascii") + "0 0 0\n2 0 0\n0 2 0\n0 0 2\n6 0 2 1 3 0 2\n");
+  for (const bool big : {false, true}) {
+    std::string bytes = with_format(big ? "binary_big_endian" : "binary_little_endian");
+    const auto put = [&](const void* p) {
+      const char* c = static_cast<const char*>(p);
+      std::string four(c, c + 4);
+      if (big) std::reverse(four.begin(), four.end());
+      bytes += four;
+    };
+    for (const float f : {0.f, 0.f, 0.f, 2.f, 0.f, 0.f, 0.f, 2.f, 0.f, 0.f, 0.f, 2.f}) put(&f);
+    // The same strip, a restart (-1) and a strip 1 1 2 whose one triangle repeats 1: skipped.
+    for (const int i : {10, 0, 2, 1, 3, 0, 2, -1, 1, 1, 2}) put(&i);
+    check(big ? "big.ply" : "little.ply", bytes);
+  }
 }
 
 TEST(Readers, AsciiStlOffPlyAgree) {
