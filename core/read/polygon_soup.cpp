@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <mutex>
 #include <sstream>
 
 #include "core/base/errors.h"
@@ -97,29 +98,38 @@ class SoupImporter final : public om::IO::BaseImporter {
   PolygonSoup& soup_;
 };
 
-/// Routes OpenMesh's diagnostic streams into a string for the lifetime of the object.
+/// OpenMesh's diagnostics of one read, as a string. Its error stream is routed, once for the
+/// process, into one buffer (its log and output streams are muted): OpenMesh 9's
+/// multiplex_streambuf::disconnect() does not free what connect() allocated, so connecting per
+/// read leaked. Reads take turns on the buffer (OpenMesh's streams are global anyway).
 class CaptureOpenMeshLog {
  public:
-  CaptureOpenMeshLog() {
-    ::omerr().disconnect(std::cerr);
-    ::omlog().disconnect(std::cerr);
-    ::omout().disconnect(std::cout);
-    ::omerr().connect(text_);
-  }
-  ~CaptureOpenMeshLog() {
-    ::omerr().disconnect(text_);
-    ::omerr().connect(std::cerr);
-  }
+  CaptureOpenMeshLog() : lock_(mutex()) { buffer().str(""); }
   std::string text() {
     ::omerr().flush();
-    std::string s = text_.str();
+    std::string s = buffer().str();
     std::replace(s.begin(), s.end(), '\n', ' ');
     while (!s.empty() && s.back() == ' ') s.pop_back();
     return s;
   }
 
  private:
-  std::ostringstream text_;
+  static std::mutex& mutex() {
+    static std::mutex m;
+    return m;
+  }
+  static std::ostringstream& buffer() {
+    static std::ostringstream* const b = [] {
+      auto* s = new std::ostringstream;  // lives as long as OpenMesh's streams refer to it
+      ::omerr().disconnect(std::cerr);
+      ::omlog().disconnect(std::cerr);
+      ::omout().disconnect(std::cout);
+      ::omerr().connect(*s);
+      return s;
+    }();
+    return *b;
+  }
+  std::lock_guard<std::mutex> lock_;
 };
 
 std::string lower(std::string s) {
