@@ -71,6 +71,32 @@ auto in_arena(int threads, const Body& body) {
   throw InternalError(message.str());
 }
 
+/// A given level set (--level-set, a .vdb input) must be negative inside, as OpenVDB's level
+/// sets are: phi a quarter voxel inside the centroids of up to 64 faces spread over the surface.
+/// \throw InputError when most of them are positive (a grid of the other sign convention).
+void check_level_set_sign(const LoadedSurface& surface, const FieldSampler& fields,
+                          const std::string& level_set) {
+  const SurfaceMesh& mesh = surface.mesh;
+  const std::size_t faces = mesh.triangles.size(), samples = std::min<std::size_t>(faces, 64);
+  const std::unique_ptr<FieldProbe> probe = fields.probe();
+  std::size_t positive = 0;
+  for (std::size_t i = 0; i < samples; ++i) {
+    const std::size_t f = i * faces / samples;
+    const Triangle& t = mesh.triangles[f];
+    const Vec3d centroid = (mesh.points[t[0]] + mesh.points[t[1]] + mesh.points[t[2]]) / 3.0;
+    const Vec3d inside =
+        centroid - normalized(face_normal_area(mesh, f)) * (0.25 * fields.voxel_size());
+    positive += probe->phi(inside) > 0;
+  }
+  if (2 * positive <= samples) return;
+  throw InputError(level_set +
+                   ": the level set is positive inside the surface (phi > 0 just "
+                   "inside " +
+                   std::to_string(positive) + " of " + std::to_string(samples) + " faces of " +
+                   surface.source +
+                   "); vdb_shell needs OpenVDB's convention, negative inside: negate the grid");
+}
+
 /// The inner side as a surface; a vertex kept on the surface is its own inner vertex.
 SurfaceMesh inner_surface_of(const SurfaceMesh& mesh, const ShellInput& input) {
   SurfaceMesh inner;
@@ -112,6 +138,7 @@ ShellResult run(const LoadedSurface& surface, const ShellOptions& options,
     fields = options.level_set.empty() ? build_fields(mesh, field_options, monitor)
                                        : fields_from_level_set(options.level_set, options.grid_name,
                                                                mesh, field_options, monitor);
+    if (!options.level_set.empty()) check_level_set_sign(surface, *fields, options.level_set);
     monitor.finish();
     r.timings.fields = seconds_since(t0);
   }

@@ -249,6 +249,33 @@ TEST(Pipeline, VdbInputRoundTrip) {
   EXPECT_THROW(build_shell_from_level_set(dir.file("s.vdb"), both), InputError);
 }
 
+TEST(Pipeline, ALevelSetPositiveInsideTheSurfaceIsRefused) {
+  // The tube's level set is positive in its hole (inner radius 0.3); a small box in the hole,
+  // within the level set's band next to the wall, sees phi > 0 just inside every face: what a
+  // grid of the other sign convention looks like.
+  TempDir dir;
+  ShellOptions o = at_resolution(48);
+  o.traces_only = true;
+  o.keep_fields = true;
+  write_fields(dir.file("tube.vdb"), build_shell(make_shape("tube", 1), o));
+  SurfaceMesh box = make_shape("box", 1);
+  for (Vec3d& p : box.points) p = p * 0.02 + Vec3d{0.27, 0, 0};
+  ShellOptions in_tube = at_resolution(48);
+  in_tube.level_set = dir.file("tube.vdb");
+  try {
+    build_shell(box, in_tube);
+    ADD_FAILURE() << "no InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("positive inside the surface"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("tube.vdb"), std::string::npos) << e.what();
+  }
+  // The tube in its own level set is fine.
+  ShellOptions own = at_resolution(48);
+  own.level_set = dir.file("tube.vdb");
+  EXPECT_NO_THROW(build_shell(make_shape("tube", 1), own));
+}
+
 TEST(Pipeline, FieldNoticesReachTheResult) {
   // A narrow-band level set gets its interior filled by fast sweeping, which says so.
   if (run_command("command -v vdb_tool").exit_code != 0)
