@@ -138,11 +138,14 @@ void check_contradictions(const CliOptions& o) {
 /// Checks every output path before any work: known extension, existing folder.
 void check_outputs(const CliOptions& o) {
   namespace fs = std::filesystem;
+  // The folder exists and takes a file (a temporary one, created and removed): found before
+  // the work rather than after it.
   auto folder_exists = [](const std::string& path, const char* option) {
     const fs::path parent = fs::path(path).parent_path();
     if (!parent.empty() && !fs::is_directory(parent))
       throw InputError(std::string(option) + " " + path + ": the folder " + parent.string() +
                        " does not exist; create it first");
+    AtomicFile probe(path);  // \throw ResourceError naming the path and why
   };
   auto ext_is = [](const std::string& path, const char* ext) {
     return fs::path(path).extension() == ext;
@@ -275,6 +278,8 @@ RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& 
     return outcome;
   }
 
+  // Every output of the run appears together, or none does (a failing one removes the others).
+  CommitGroup outputs;
   progress.start("write");
   write_shell(opt.output, r, opt.msh_version);
   if (!opt.grids.empty()) write_fields(opt.grids, r);
@@ -288,6 +293,7 @@ RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& 
   outcome.report = report_json(r, files, t_read, t_write);
   if (!opt.report.empty())
     write_file_atomically(opt.report, [&](std::ostream& os) { os << outcome.report; });
+  outputs.commit();
   if (opt.verbose) err << "vdb_shell: timings: " << progress.timings() << "\n";
 
   outcome.shell = true;

@@ -122,9 +122,41 @@ void AtomicFile::finish() {
   finished_ = true;
 }
 
+namespace {
+thread_local CommitGroup* t_group = nullptr;  ///< the innermost group of this thread
+}  // namespace
+
+CommitGroup::CommitGroup() : previous_(t_group) { t_group = this; }
+
+CommitGroup::~CommitGroup() {
+  t_group = previous_;
+  for (const Pending& p : pending_) {
+    std::error_code ec;
+    fs::remove(p.temp_path, ec);
+    release_temp_file(p.registry_slot);
+  }
+}
+
+void CommitGroup::commit() {
+  while (!pending_.empty()) {
+    const Pending p = pending_.front();
+    std::error_code ec;
+    fs::rename(p.temp_path, p.path, ec);
+    if (ec) throw_cannot_write(p.path, ec.message());  // the destructor removes the rest
+    release_temp_file(p.registry_slot);
+    pending_.erase(pending_.begin());
+  }
+}
+
 void AtomicFile::commit() {
   if (committed_) return;
   finish();
+  if (t_group != nullptr) {  // complete: the group renames it with the others
+    t_group->pending_.push_back({temp_path_, path_, registry_slot_});
+    registry_slot_ = -1;
+    committed_ = true;
+    return;
+  }
   std::error_code ec;
   fs::rename(temp_path_, path_, ec);
   if (ec) {

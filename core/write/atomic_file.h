@@ -13,6 +13,7 @@
 #include <functional>
 #include <ostream>
 #include <string>
+#include <vector>
 
 namespace vdb_shell {
 
@@ -53,7 +54,7 @@ class AtomicFile {
   const std::string& path() const { return path_; }
   /// The temporary path, `<path>.tmp.<pid>.<n>`.
   const std::string& temp_path() const { return temp_path_; }
-  /// True once commit() succeeded.
+  /// True once commit() succeeded (or handed the file to a CommitGroup).
   bool committed() const { return committed_; }
 
  private:
@@ -65,6 +66,36 @@ class AtomicFile {
   int registry_slot_ = -1;  ///< slot in the pending-temp-file registry, -1 if none
   bool finished_ = false;
   bool committed_ = false;
+};
+
+/// All-or-nothing outputs: while a CommitGroup lives on a thread, AtomicFile::commit() there only
+/// finishes its file (complete and checked, still under its temporary name) and hands it to
+/// the group; commit() renames them all onto their targets, in order; a group destroyed without
+/// commit() (an exception on the way) removes them all, so none of the outputs appears.
+///
+///   CommitGroup outputs;
+///   write_shell(...); write_report(...);   // each complete, none visible yet
+///   outputs.commit();                      // all appear
+class CommitGroup {
+ public:
+  CommitGroup();
+  /// Removes every file not yet committed.
+  ~CommitGroup();
+  CommitGroup(const CommitGroup&) = delete;
+  CommitGroup& operator=(const CommitGroup&) = delete;
+  /// Renames every finished file onto its target. A rename that fails removes the files not yet
+  /// renamed and throws ResourceError naming the target (those renamed before stay: renames are
+  /// where nothing can be undone).
+  void commit();
+
+ private:
+  friend class AtomicFile;
+  struct Pending {
+    std::string temp_path, path;
+    int registry_slot;
+  };
+  std::vector<Pending> pending_;
+  CommitGroup* previous_;
 };
 
 /// Writes `path` atomically: opens an AtomicFile, calls `body` with its stream, commits.
