@@ -430,15 +430,21 @@ PYBIND11_MODULE(vdb_shell, m) {
         py::arg("path"));
   m.def(
       "write",
-      [](py::handle path, const PyShellResult& result, int msh_version) {
+      [](py::handle path, const PyShellResult& result, const py::object& msh_version) {
         const std::string p = to_path(path, "path");
-        write_released([&] { write_shell(p, *result.result, msh_version); });
+        // 4.1 / 2.2 as users write them: numbers or strings, or 41 / 22.
+        const std::string v = py::str(msh_version).cast<std::string>();
+        const int version = v == "4.1" || v == "41" ? 41 : v == "2.2" || v == "22" ? 22 : 0;
+        if (version == 0)
+          throw InputError("msh_version " + v + ": must be 4.1 or 2.2 (the Gmsh format version)");
+        write_released([&] { write_shell(p, *result.result, version); });
       },
-      "write(path, result, msh_version=41)\n\n"
+      "write(path, result, msh_version='4.1')\n\n"
       "Writes the shell to path, format from its extension (.vtu .vtk .msh .mesh .ele; .msh as "
-      "Gmsh 4.1 or, with msh_version=22, 2.2), atomically: a failed write leaves no file. "
-      "Raises InputError for an unknown extension, ResourceError if the file cannot be written.",
-      py::arg("path"), py::arg("result"), py::arg("msh_version") = 41);
+      "Gmsh 4.1 or, with msh_version='2.2' (or 2.2, 22), 2.2), atomically: a failed write leaves "
+      "no file. Raises InputError for an unknown extension or version, ResourceError if the file "
+      "cannot be written.",
+      py::arg("path"), py::arg("result"), py::arg("msh_version") = "4.1");
   m.def(
       "write_inner",
       [](py::handle path, const PyShellResult& result) {

@@ -488,12 +488,16 @@ def test_concurrent_calls(sphere, sphere_shell):
 
 @pytest.mark.parametrize("name, options", [
     ("shell.vtu", {}), ("shell.vtk", {}), ("shell.msh", {}), ("shell22.msh", {"msh_version": 22}),
+    ("shell22s.msh", {"msh_version": "2.2"}), ("shell22f.msh", {"msh_version": 2.2}),
 ])
 def test_write_shell(sphere_shell, tmp_path, name, options):
     path = tmp_path / name
     vdb_shell.write(path, sphere_shell, **options)
     assert path.is_file() and path.stat().st_size > 0
     assert [p.name for p in tmp_path.iterdir()] == [name]
+    if name.endswith(".msh"):
+        version = "2.2" if "22" in name else "4.1"
+        assert path.read_text().startswith("$MeshFormat\n" + version + " 0 8\n")
     meshio = pytest.importorskip("meshio")
     mesh = meshio.read(str(path))
     tets = sum(len(c.data) for c in mesh.cells if c.type == "tetra")
