@@ -40,9 +40,8 @@ TEST(CommitGroup, AFailureOnTheWayLeavesNoneOfTheOutputs) {
   try {
     CommitGroup group;
     write_file_atomically(dir.file("shell.vtu"), [](std::ostream& os) { os << "tets"; });
-    write_file_atomically(dir.file("report.json"), [](std::ostream&) {
-      throw std::runtime_error("the report failed");
-    });
+    write_file_atomically(dir.file("report.json"),
+                          [](std::ostream&) { throw std::runtime_error("the report failed"); });
     group.commit();
     ADD_FAILURE() << "no exception";
   } catch (const std::runtime_error&) {
@@ -59,9 +58,9 @@ TEST(CommitGroup, TheCliChecksEveryOutputBeforeTheWork) {
   test::write_text(dir.file("tet.obj"),
                    "v 0 0 0\nv 2 0 0\nv 0 2 0\nv 0 0 2\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n");
   fs::create_directory(dir.file("taken"));
-  const auto r = test::run_command(test::vdb_shell_bin() + " '" + dir.file("tet.obj") + "' -o '" +
-                                   dir.file("s.vtu") + "' -r 16 --report '" + dir.file("taken") +
-                                   "'");
+  const auto r =
+      test::run_command(test::vdb_shell_bin() + " '" + dir.file("tet.obj") + "' -o '" +
+                        dir.file("s.vtu") + "' -r 16 --report '" + dir.file("taken") + "'");
   EXPECT_EQ(r.exit_code, 3) << r.err;
   EXPECT_NE(r.err.find("taken"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir.file("s.vtu")));
