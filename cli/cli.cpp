@@ -6,14 +6,18 @@
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <mutex>
 #include <new>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -45,6 +49,7 @@ struct CliOptions {
   std::string inner;
   std::string report;
   int msh_version = 41;
+  double timeout = 0;  ///< seconds per input, 0: none
   std::string integrator = "rk2";
   bool quiet = false;
   bool verbose = false;
@@ -207,6 +212,40 @@ void check_batch(const CliOptions& o) {
 }
 
 /// What one run of the pipeline produced.
+/// Sets its flag (a RunControl's cancel) once `seconds` have passed, from a thread of its own;
+/// 0 seconds: never. The destructor stops the thread at once.
+class Watchdog {
+ public:
+  explicit Watchdog(double seconds) {
+    if (seconds <= 0) return;
+    thread_ = std::thread([this, seconds] {
+      std::unique_lock<std::mutex> lock(mutex_);
+      if (!wake_.wait_for(lock, std::chrono::duration<double>(seconds), [this] { return done_; }))
+        fired_ = true;
+    });
+  }
+  ~Watchdog() {
+    if (!thread_.joinable()) return;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      done_ = true;
+    }
+    wake_.notify_all();
+    thread_.join();
+  }
+  Watchdog(const Watchdog&) = delete;
+  Watchdog& operator=(const Watchdog&) = delete;
+  const std::atomic<bool>* flag() const { return &fired_; }
+  bool fired() const { return fired_; }
+
+ private:
+  std::atomic<bool> fired_{false};
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  bool done_ = false;
+  std::thread thread_;
+};
+
 struct RunOutcome {
   bool shell = false;   ///< false: summary or --grids only, nothing below is set
   std::string report;   ///< the JSON report
@@ -260,7 +299,19 @@ RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& 
   control.progress = [&progress](const std::string& stage, double fraction) {
     progress.update(stage, fraction);
   };
-  const ShellResult r = build_shell(surface, shell, control);
+  Watchdog watchdog(opt.timeout);
+  control.cancel = watchdog.flag();
+  const ShellResult r = [&] {
+    try {
+      return build_shell(surface, shell, control);
+    } catch (const CancelledError& e) {
+      if (!watchdog.fired()) throw;
+      std::string stage = e.what();  // "cancelled during the X stage; ..."
+      stage = stage.substr(0, stage.find(';'));
+      throw ResourceError(opt.input + ": timed out after " + fmt(opt.timeout) + " s (--timeout; " +
+                          stage + "); raise --timeout or lower --resolution; nothing was written");
+    }
+  }();
   if (!opt.quiet)
     for (std::size_t i = surface.notices.size(); i < r.notices.size(); ++i)
       err << "vdb_shell: note: " << r.notices[i] << "\n";
@@ -483,6 +534,10 @@ void register_options(CLI::App& app, CliOptions& opt) {
       ->group(og);
 
   app.add_option("-j,--threads", opt.shell.threads, "Worker threads (0: all cores)")
+      ->check(CLI::NonNegativeNumber)
+      ->group("Performance");
+  app.add_option("--timeout", opt.timeout,
+                 "Give up on an input after this many seconds: exit 3, nothing written (0: none)")
       ->check(CLI::NonNegativeNumber)
       ->group("Performance");
 }

@@ -215,6 +215,18 @@ TEST_F(CliOptionEffects, MshVersionPicksTheGmshFormat) {
   EXPECT_FALSE(fs::exists(file("b.msh")));
 }
 
+TEST_F(CliOptionEffects, TimeoutGivesUpWithExit3AndNothingWritten) {
+  // A run of well over a second at 256^3, given a millisecond: cancelled in its first stage.
+  const CliRun r = cli({star(), "-o", file("s.vtu"), "-r", "256", "--timeout", "0.001"});
+  EXPECT_EQ(r.code, 3) << r.err;
+  EXPECT_NE(r.err.find("timed out after 0.001 s"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(file("s.vtu")));
+  // A generous timeout changes nothing.
+  ASSERT_EQ(cli({star(), "-o", file("t.vtu"), "-r", "32", "-q", "--timeout", "600"}).code, 0);
+  ASSERT_EQ(cli({star(), "-o", file("u.vtu"), "-r", "32", "-q"}).code, 0);
+  EXPECT_EQ(test::read_text(file("t.vtu")), test::read_text(file("u.vtu")));
+}
+
 TEST_F(CliOptionEffects, MaxMemoryRefusesTheFieldBuild) {
   // A resource limit, not bad input: exit 3 (docs/usage.md), the fitting resolution named.
   const CliRun r = cli({star(), "-o", file("s.vtu"), "-r", "32", "--max-memory", "0.000001"});
@@ -393,6 +405,7 @@ const std::map<std::string, std::string>& shown_here() {
       {"--adaptivity", "CliOptionEffects.AdaptivityLowersTheFaceCountOfAVdbInput"},
       {"--level-set", "CliOptionEffects.LevelSetReplacesTheBuiltField"},
       {"--grid", "CliOptionEffects.GridSelectsTheNamedGrid"},
+      {"--timeout", "CliOptionEffects.TimeoutGivesUpWithExit3AndNothingWritten"},
   };
   return m;
 }
