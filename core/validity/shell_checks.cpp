@@ -153,16 +153,32 @@ std::vector<std::array<std::uint32_t, 2>> surface_self_intersections(const Surfa
     for (const std::uint32_t c : face_cells[f])
       cell_faces[c].push_back(static_cast<std::uint32_t>(f));
   }
-  // Every triangle against the later ones sharing one of its cells, each pair once.
-  std::vector<std::uint32_t> mark(n, UINT32_MAX);
-  for (std::uint32_t f = 0; f < n && out.size() < max_listed; ++f)
-    for (const std::uint32_t c : face_cells[f])
-      for (const std::uint32_t g : cell_faces[c]) {
-        if (g <= f || mark[g] == f) continue;
-        mark[g] = f;
-        if (surface_triangles_cross(surface, f, g) && out.size() < max_listed)
-          out.push_back({f, g});
-      }
+  // Every triangle against the later ones sharing one of its cells, each pair once; blocks of
+  // triangles in parallel, each keeping at most max_listed pairs, joined in triangle order.
+  const std::size_t blocks = std::min<std::size_t>(n, 256);
+  std::vector<std::vector<std::array<std::uint32_t, 2>>> found(blocks);
+  for_each_index(
+      blocks,
+      [&](std::size_t b) {
+        std::vector<std::uint32_t> later;
+        for (auto f = static_cast<std::uint32_t>(b * n / blocks); f < (b + 1) * n / blocks; ++f) {
+          later.clear();
+          for (const std::uint32_t c : face_cells[f])
+            for (const std::uint32_t g : cell_faces[c])
+              if (g > f) later.push_back(g);
+          std::sort(later.begin(), later.end());
+          later.erase(std::unique(later.begin(), later.end()), later.end());
+          for (const std::uint32_t g : later) {
+            if (!surface_triangles_cross(surface, f, g)) continue;
+            found[b].push_back({f, g});
+            if (found[b].size() >= max_listed) return;
+          }
+        }
+      },
+      2);
+  for (const auto& pairs : found)
+    for (const auto& pair : pairs)
+      if (out.size() < max_listed) out.push_back(pair);
   return out;
 }
 

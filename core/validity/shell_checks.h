@@ -154,8 +154,8 @@ class ShellChecker {
 
 /// Pairs of surface triangles (i, j), i < j, whose interiors cross: the surface intersects
 /// itself and bounds no single volume. Triangles that only touch (a shared vertex or edge
-/// included) do not count. At most `max_listed` pairs, by ascending i; the pairs of one i in the
-/// order a grid of cells meets them (not necessarily ascending j).
+/// included) do not count. At most `max_listed` pairs, by ascending i, then j. Parallel over
+/// blocks of triangles; the same pairs for any thread count.
 std::vector<std::array<std::uint32_t, 2>> surface_self_intersections(const SurfaceMesh& surface,
                                                                      std::size_t max_listed);
 
