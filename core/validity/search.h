@@ -30,7 +30,9 @@
 // the floor configuration is checked and the run fails, naming what it broke.
 // Vertices that were never involved keep their full depth: the shell stays as thick as the
 // traces allow wherever it is already valid; the gentle shrink, applied locally until each
-// offence is gone, takes little more than needed from those that were (docs/validity.md).
+// offence is gone, takes little more than needed from those that were, and once the shell is
+// valid, ValidityOptions::give_back passes try every moved-back vertex one step deeper again
+// (the rounds step back what then offends; a pass that ends invalid is undone; docs/validity.md).
 //
 // Cost: one ShellChecker (shell_checks.h) serves every round, testing only the prisms that
 // moved since the previous round (or still offend); the result gets one full check_shell().
