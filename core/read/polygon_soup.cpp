@@ -328,7 +328,8 @@ void check_obj_indices(const std::string& path) {
     if (keyword("v")) ++so_far;
     if (!keyword("f")) continue;
     const char* text = line.c_str() + line.find('f') + 1;
-    for (;;) {  // v, v/vt, v//vn or v/vt/vn: the vertex index comes first
+    int corners = 0;
+    for (;; ++corners) {  // v, v/vt, v//vn or v/vt/vn: the vertex index comes first
       while (*text == ' ' || *text == '\t' || *text == '\r') ++text;
       if (*text == '\0' || *text == '#') break;
       const char* word = text;
@@ -344,6 +345,11 @@ void check_obj_indices(const std::string& path) {
           " vertices, numbered from 1, or back from -1) — fix: the file is corrupt "
           "or truncated; re-export the mesh");
     }
+    if (corners < 3)
+      throw InputError(path + ": face " + std::to_string(face) + " (line " +
+                       std::to_string(line_no) + ") has " + std::to_string(corners) +
+                       " corners, a face needs 3 (a file cut short ends so) — fix: re-export the "
+                       "mesh");
     ++face;
   }
 }
@@ -353,8 +359,8 @@ void check_obj_indices(const std::string& path) {
 /// other one reversed to keep the orientation; triangles with a repeated index are skipped.
 /// ASCII and binary (either byte order). Empty when the file has no tristrips element.
 /// Throws InputError for a file that ends early or a type it does not know.
-std::vector<std::vector<std::int64_t>> read_ply_tristrips(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
+/// A PLY header: its format and elements, read up to end_header from `in`.
+struct PlyHeader {
   struct Property {
     std::string type, count_type;  ///< count_type: non-empty for a list
   };
@@ -363,19 +369,43 @@ std::vector<std::vector<std::int64_t>> read_ply_tristrips(const std::string& pat
     long long count = 0;
     std::vector<Property> properties;
   };
+  std::string format;
   std::vector<Element> elements;
-  std::string line, format;
+  /// The count of element `name`, or -1 without one.
+  long long count(const std::string& name) const {
+    for (const Element& e : elements)
+      if (e.name == name) return e.count;
+    return -1;
+  }
+};
+
+PlyHeader read_ply_header(std::istream& in) {
+  PlyHeader header;
+  std::string line;
   while (std::getline(in, line)) {
     if (!line.empty() && line.back() == '\r') line.pop_back();
     const std::vector<std::string> w = words(line);
     if (w.empty()) continue;
     if (w[0] == "end_header") break;
-    if (w[0] == "format" && w.size() > 1) format = w[1];
-    if (w[0] == "element" && w.size() > 2) elements.push_back({w[1], std::atoll(w[2].c_str()), {}});
-    if (w[0] == "property" && !elements.empty() && w.size() > 2)
-      elements.back().properties.push_back(w[1] == "list" && w.size() > 4 ? Property{w[3], w[2]}
-                                                                          : Property{w[1], ""});
+    if (w[0] == "format" && w.size() > 1) header.format = w[1];
+    if (w[0] == "element" && w.size() > 2)
+      header.elements.push_back({w[1], std::atoll(w[2].c_str()), {}});
+    if (w[0] == "property" && !header.elements.empty() && w.size() > 2)
+      header.elements.back().properties.push_back(w[1] == "list" && w.size() > 4
+                                                      ? PlyHeader::Property{w[3], w[2]}
+                                                      : PlyHeader::Property{w[1], ""});
   }
+  return header;
+}
+
+std::vector<std::vector<std::int64_t>> read_ply_tristrips(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  const PlyHeader header = read_ply_header(in);
+  using Element = PlyHeader::Element;
+  using Property = PlyHeader::Property;
+  const std::vector<Element>& elements = header.elements;
+  const std::string& format = header.format;
+  std::string line;
   std::vector<std::vector<std::int64_t>> triangles;
   const auto strips = std::find_if(elements.begin(), elements.end(),
                                    [](const Element& e) { return e.name == "tristrips"; });
@@ -509,6 +539,17 @@ PolygonSoup read_polygon_soup(const std::string& path) {
   if (ok && ext == ".ply" && soup.polygons.empty()) {
     soup.polygons = read_ply_tristrips(path);  // OpenMesh skips that element
     if (!soup.polygons.empty()) log.clear();   // its complaint was about the tristrips
+  }
+  if (ok && ext == ".ply") {  // OpenMesh stops quietly where a file ends early
+    std::ifstream in(path, std::ios::binary);
+    const PlyHeader header = read_ply_header(in);
+    const long long vertices = header.count("vertex"), faces = header.count("face");
+    if (vertices > static_cast<long long>(soup.points.size()) ||
+        faces > static_cast<long long>(soup.polygons.size()))
+      throw InputError(path + ": truncated: the header announces " + std::to_string(vertices) +
+                       " vertices and " + std::to_string(std::max(faces, 0LL)) +
+                       " faces, the file holds " + std::to_string(soup.points.size()) + " and " +
+                       std::to_string(soup.polygons.size()) + " — fix: re-export the mesh");
   }
   const std::string detail = log.empty() ? "" : " (OpenMesh: " + log + ")";
   if (!ok)

@@ -320,6 +320,16 @@ TEST(Readers, HostileOffAndObjFilesAreBadInputNamingTheLine) {
     const std::string e = load_error("bad.obj", cube_obj(-1, bad + "\n"));
     EXPECT_TRUE(contains(e, "face 12 (line 21): out-of-range vertex index")) << bad << " -> " << e;
   }
+  // Cut short: an OBJ ending inside a face line, a PLY with fewer faces than its header says.
+  std::string cut = cube_obj();
+  cut.resize(cut.size() - 4);  // "f 4 5 8\n" -> "f 4 "
+  EXPECT_TRUE(contains(load_error("cut.obj", cut), "face 11 (line 20) has 1 corners")) << cut;
+  const std::string ply =
+      "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 4\nproperty list uchar int vertex_indices\nend_header\n"
+      "0 0 0\n2 0 0\n0 2 0\n0 0 2\n3 0 2 1\n3 0 1 3\n";
+  EXPECT_TRUE(contains(load_error("cut.ply", ply),
+                       "truncated: the header announces 4 vertices and 4 faces"));
   EXPECT_EQ(load_error("relative.obj", std::string(kCubeVertices) + "f -8 -6 -7\n" +
                                            "f 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\n"
                                            "f 2 3 7\nf 2 7 6\nf 3 4 8\nf 3 8 7\nf 4 1 5\n"
