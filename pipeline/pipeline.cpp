@@ -336,9 +336,13 @@ std::string report_json(const ShellResult& r, const ReportFiles& files, double r
                      {"floor_valid", v.floor_valid},
                      {"seconds", v.seconds}};
     const QualitySummary& q = r.quality;
-    j["quality"] = {{"min", q.min_quality},           {"median", q.median_quality},
-                    {"mean", q.mean_quality},         {"min_dihedral_deg", q.min_dihedral_deg},
-                    {"non_positive", q.non_positive}, {"histogram", q.histogram}};
+    j["quality"] = {{"min", q.min_quality},
+                    {"p5", q.p5_quality},
+                    {"median", q.median_quality},
+                    {"mean", q.mean_quality},
+                    {"min_dihedral_deg", q.min_dihedral_deg},
+                    {"non_positive", q.non_positive},
+                    {"histogram", q.histogram}};
   }
   const StageTimings& t = r.timings;
   j["timings_s"] = {{"read", read_seconds},

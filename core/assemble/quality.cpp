@@ -93,6 +93,7 @@ QualitySummary summarize_quality(const SurfaceMesh& surface, const TetMesh& mesh
   s.min_quality = q.front();
   const std::size_t mid = q.size() / 2;
   s.median_quality = q.size() % 2 == 1 ? q[mid] : 0.5 * (q[mid - 1] + q[mid]);
+  s.p5_quality = q[q.size() / 20];
   return s;
 }
 

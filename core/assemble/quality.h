@@ -44,6 +44,7 @@ struct QualitySummary {
   std::size_t non_positive = 0;   ///< tets with Q <= 0 (flat or inverted), not in histogram
   double min_quality = 0.0;       ///< smallest Q (0 when there are no tets)
   double median_quality = 0.0;    ///< median Q (mean of the two middle values for even counts)
+  double p5_quality = 0.0;        ///< 5th percentile of Q (the value at rank floor(0.05 T))
   double mean_quality = 0.0;      ///< arithmetic mean of Q
   double min_dihedral_deg = 0.0;  ///< smallest dihedral angle over all tets, degrees
   double shell_volume = 0.0;      ///< sum of signed tet volumes, world units cubed

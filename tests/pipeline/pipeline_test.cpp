@@ -64,6 +64,7 @@ TEST(Pipeline, ReportHasEveryDocumentedKey) {
                           "/validity/rounds",
                           "/validity/on_surface_vertices",
                           "/quality/min",
+                          "/quality/p5",
                           "/quality/median",
                           "/quality/histogram",
                           "/stop_reasons/critical",

@@ -81,7 +81,13 @@ TEST(Quality, HistogramBinsAndStatistics) {
   EXPECT_DOUBLE_EQ(q.median_quality, 0.05);
   EXPECT_DOUBLE_EQ(q.mean_quality, 0.55 / 3.0);
   EXPECT_NEAR(q.shell_volume, 1.0 / 6.0, 1e-15);
-  EXPECT_EQ(q.coverage, 0.0);  // no enclosed volume
+  EXPECT_EQ(q.coverage, 0.0);            // no enclosed volume
+  EXPECT_DOUBLE_EQ(q.p5_quality, -0.5);  // rank floor(0.05 * 3) = 0
+  // 40 tets of Q 0.01, 0.02, ..., 0.40: the 5th percentile is rank 2, Q 0.03.
+  m.tets.assign(40, {0, 1, 2, 3});
+  m.quality.clear();
+  for (int i = 1; i <= 40; ++i) m.quality.push_back(0.01 * i);
+  EXPECT_DOUBLE_EQ(summarize_quality(s, m).p5_quality, 0.03);
 }
 
 }  // namespace
