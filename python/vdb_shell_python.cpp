@@ -391,7 +391,8 @@ PYBIND11_MODULE(vdb_shell, m) {
       .def_readonly("points", &PyShellResult::points,
                     "(p, 3) float64: the surface's vertices first, then the inner vertices")
       .def_readonly("tets", &PyShellResult::tets,
-                    "(t, 4) int64 indices into points, positively oriented (t <= 3 * faces)")
+                    "(t, 4) int64 indices into points, positively oriented (t <= 3 * faces + 2 * "
+                    "sectors of folded vertices)")
       .def_readonly("source_triangle", &PyShellResult::source_triangle,
                     "(t,) int64: per tet, the input triangle (row of faces) it was built on")
       .def_readonly("quality", &PyShellResult::quality,
