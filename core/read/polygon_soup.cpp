@@ -398,6 +398,65 @@ PlyHeader read_ply_header(std::istream& in) {
   return header;
 }
 
+/// A PLY header OpenMesh can be trusted with: "ply", a known format, element lines with counts
+/// >= 0, property lines with known types, end_header, and element counts the file's bytes can
+/// hold (a vertex takes at least 3 bytes, a face or strip 2). OpenMesh loops forever on a
+/// property line cut short. Throws InputError naming the line.
+void check_ply_header(const std::string& path, std::uintmax_t size) {
+  std::ifstream in(path, std::ios::binary);
+  std::string line;
+  std::size_t line_no = 0;
+  const auto fail = [&](const std::string& what) {
+    throw InputError(path + ": PLY header line " + std::to_string(line_no) + ": " + what +
+                     " — fix: re-export the mesh (a complete PLY file)");
+  };
+  static const char* const kTypes[] = {"char",  "uchar",  "short",   "ushort", "int",   "uint",
+                                       "float", "double", "int8",    "uint8",  "int16", "uint16",
+                                       "int32", "uint32", "float32", "float64"};
+  const auto known = [](const std::string& t) {
+    return std::find(std::begin(kTypes), std::end(kTypes), t) != std::end(kTypes);
+  };
+  long double least = 0;
+  bool elements = false;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    std::istringstream words_in(line);
+    std::vector<std::string> w;
+    for (std::string x; words_in >> x;) w.push_back(x);
+    if (line_no == 1) {
+      if (w.size() != 1 || w[0] != "ply") fail("not 'ply'");
+      continue;
+    }
+    if (w.empty() || w[0] == "comment" || w[0] == "obj_info") continue;
+    if (w[0] == "end_header") {
+      if (least > static_cast<long double>(size))
+        fail("its element counts are more than the file's " + std::to_string(size) +
+             " bytes can hold");
+      return;
+    }
+    if (w[0] == "format") {
+      if (w.size() != 3 ||
+          (w[1] != "ascii" && w[1] != "binary_little_endian" && w[1] != "binary_big_endian"))
+        fail("unknown format '" + line.substr(0, 60) + "'");
+    } else if (w[0] == "element") {
+      const char* text = w.size() == 3 ? w[2].c_str() : "";
+      long long count = -1;
+      if (w.size() != 3 || !leading_integer(text, count) || *text != '\0' || count < 0)
+        fail("an element needs a name and a count >= 0: '" + line.substr(0, 60) + "'");
+      least += static_cast<long double>(count) * (w[1] == "vertex" ? 3 : 2);
+      elements = true;
+    } else if (w[0] == "property") {
+      const bool list = w.size() == 5 && w[1] == "list" && known(w[2]) && known(w[3]);
+      if (!elements || !(list || (w.size() == 3 && known(w[1]))))
+        fail("not a property of a known type: '" + line.substr(0, 60) + "'");
+    } else {
+      fail("unknown keyword '" + w[0].substr(0, 24) + "'");
+    }
+  }
+  fail("the file ends before end_header");
+}
+
 std::vector<std::vector<std::int64_t>> read_ply_tristrips(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   const PlyHeader header = read_ply_header(in);
@@ -524,6 +583,7 @@ PolygonSoup read_polygon_soup(const std::string& path) {
     if (!problem.empty()) throw InputError(path + ": " + problem);
   }
   if (ext == ".off") check_off_structure(path, size);
+  if (ext == ".ply") check_ply_header(path, size);
   if (ext == ".obj") check_obj_indices(path);
 
   PolygonSoup soup;

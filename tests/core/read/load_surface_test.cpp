@@ -330,6 +330,15 @@ TEST(Readers, HostileOffAndObjFilesAreBadInputNamingTheLine) {
       "0 0 0\n2 0 0\n0 2 0\n0 0 2\n3 0 2 1\n3 0 1 3\n";
   EXPECT_TRUE(contains(load_error("cut.ply", ply),
                        "truncated: the header announces 4 vertices and 4 faces"));
+  // PLY headers OpenMesh would loop on or trust: refused naming the line.
+  const std::string head = ply.substr(0, ply.find("end_header"));
+  EXPECT_TRUE(contains(load_error("cut_header.ply", head.substr(0, head.rfind("property") + 9)),
+                       "PLY header line 8: not a property of a known type"));
+  EXPECT_TRUE(contains(load_error("word.ply", "ply\nforma} ascii 1.0\n" + ply.substr(20)),
+                       "PLY header line 2: unknown keyword 'forma}'"));
+  std::string huge = ply;
+  huge.replace(huge.find("vertex 4"), 8, "vertex 4000000000");
+  EXPECT_TRUE(contains(load_error("huge.ply", huge), "more than the file's"));
   EXPECT_EQ(load_error("relative.obj", std::string(kCubeVertices) + "f -8 -6 -7\n" +
                                            "f 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\n"
                                            "f 2 3 7\nf 2 7 6\nf 3 4 8\nf 3 8 7\nf 4 1 5\n"
