@@ -263,8 +263,11 @@ void check_off_structure(const std::string& path, std::uintmax_t size) {
   while (header.size() < 3 && std::getline(in, line)) {
     ++line_no;
     for (const std::string& w : words(line)) header.push_back(w);
-    if (!header.empty() && header[0].find("OFF") == std::string::npos)
-      fail("not an OFF file: line 1 starts with '" + header[0].substr(0, 20) + "'");
+    // The keyword: OFF with the prefixes of its variants (ST, C, N, 4, n: STCNOFF, 4OFF, ...).
+    const std::string& k = header.empty() ? line : header[0];
+    if (!header.empty() && (k.size() < 3 || k.compare(k.size() - 3, 3, "OFF") != 0 ||
+                            k.find_first_not_of("STCN4n") < k.size() - 3))
+      fail("not an OFF file: line 1 starts with '" + k.substr(0, 20) + "'");
     if (line.find("BINARY") != std::string::npos) return;  // binary counts: OpenMesh's checks
   }
   if (header.size() < 3)
@@ -292,7 +295,12 @@ void check_off_structure(const std::string& path, std::uintmax_t size) {
     fail("truncated: the header announces " + std::to_string(total) + " " + what +
          ", the file ends after " + std::to_string(index));
   };
-  for (long long v = 0; v < nv; ++v) next_line("vertices", v, nv);
+  for (long long v = 0; v < nv; ++v) {
+    next_line("vertices", v, nv);
+    if (words(line, 3).size() < 3)
+      fail("vertex " + std::to_string(v) + " (line " + std::to_string(line_no) +
+           ") has fewer than 3 coordinates");
+  }
   for (long long f = 0; f < nf; ++f) {
     next_line("faces", f, nf);
     const std::vector<std::string> w = words(line);
