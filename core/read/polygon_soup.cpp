@@ -258,11 +258,15 @@ void check_off_structure(const std::string& path, std::uintmax_t size) {
   const auto fail = [&](const std::string& what) {
     throw InputError(path + ": " + what + " — fix: re-export the mesh (a complete OFF file)");
   };
-  // The header: the keyword, then the counts (on its line or the next ones).
+  // The header: the keyword alone on its line (OpenMesh reads no counts there), then the counts.
   std::vector<std::string> header;
   while (header.size() < 3 && std::getline(in, line)) {
     ++line_no;
-    for (const std::string& w : words(line)) header.push_back(w);
+    const std::vector<std::string> w = words(line);
+    if (header.empty() && w.size() > 1 && w[1] != "BINARY")
+      fail("the counts must be on the line after the keyword, not on line " +
+           std::to_string(line_no));
+    header.insert(header.end(), w.begin(), w.end());
     // The keyword: OFF with the prefixes of its variants (ST, C, N, 4, n: STCNOFF, 4OFF, ...).
     const std::string& k = header.empty() ? line : header[0];
     if (!header.empty() && (k.size() < 3 || k.compare(k.size() - 3, 3, "OFF") != 0 ||

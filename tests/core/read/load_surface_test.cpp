@@ -304,6 +304,7 @@ TEST(Readers, HostileOffAndObjFilesAreBadInputNamingTheLine) {
       {"OFF\n99999999999999999999 1 0\n", "is not a number of elements"},
       {"OFF\n4 x 0\n", "face count 'x'"},
       {"OFF\x8a" + tet_off.substr(3), "not an OFF file: line 1 starts with"},
+      {"OFF 4 4 0\n" + tet_off.substr(10) + tet_faces, "the counts must be on the line after"},
       {"OFF\n4 4 0\n0 0\n2 0 0\n0 2 0\n0 0 2\n" + tet_faces,
        "vertex 0 (line 3) has fewer than 3 coordinates"},
       {tet_off + "2000000000 0 1 2\n3 0 1 3\n3 1 2 3\n3 2 0 3\n",
