@@ -412,8 +412,9 @@ PlyHeader read_ply_header(std::istream& in) {
 
 /// A PLY header OpenMesh can be trusted with: "ply", a known format, element lines with counts
 /// >= 0, property lines with known types, end_header, and element counts the file's bytes can
-/// hold (a vertex takes at least 3 bytes, a face or strip 2). OpenMesh loops forever on a
-/// property line cut short. Throws InputError naming the line.
+/// hold (a vertex takes at least 3 bytes, a face or strip 2), elements among vertex, face,
+/// tristrips and edge. OpenMesh loops forever on a property line cut short and on some unknown
+/// elements. Throws InputError naming the line.
 void check_ply_header(const std::string& path, std::uintmax_t size) {
   std::ifstream in(path, std::ios::binary);
   std::string line;
@@ -448,7 +449,7 @@ void check_ply_header(const std::string& path, std::uintmax_t size) {
       return;
     }
     if (w[0] == "format") {
-      if (w.size() != 3 ||
+      if (w.size() != 3 || w[2] != "1.0" ||
           (w[1] != "ascii" && w[1] != "binary_little_endian" && w[1] != "binary_big_endian"))
         fail("unknown format '" + line.substr(0, 60) + "'");
     } else if (w[0] == "element") {
@@ -456,6 +457,10 @@ void check_ply_header(const std::string& path, std::uintmax_t size) {
       long long count = -1;
       if (w.size() != 3 || !leading_integer(text, count) || *text != '\0' || count < 0)
         fail("an element needs a name and a count >= 0: '" + line.substr(0, 60) + "'");
+      // OpenMesh's parser hangs on some elements it does not know: only what a mesh needs.
+      if (w[1] != "vertex" && w[1] != "face" && w[1] != "tristrips" && w[1] != "edge")
+        fail("element '" + w[1].substr(0, 24) +
+             "' is none of vertex, face, tristrips, edge (the ones read)");
       least += static_cast<long double>(count) * (w[1] == "vertex" ? 3 : 2);
       elements = true;
     } else if (w[0] == "property") {

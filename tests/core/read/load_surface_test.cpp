@@ -340,6 +340,9 @@ TEST(Readers, HostileOffAndObjFilesAreBadInputNamingTheLine) {
                        "PLY header line 8: not a property of a known type"));
   EXPECT_TRUE(contains(load_error("word.ply", "ply\nforma} ascii 1.0\n" + ply.substr(20)),
                        "PLY header line 2: unknown keyword 'forma}'"));
+  std::string camera = ply;
+  camera.replace(camera.find("element face"), 0, "element camera 1\nproperty float x\n");
+  EXPECT_TRUE(contains(load_error("camera.ply", camera), "element 'camera' is none of"));
   std::string huge = ply;
   huge.replace(huge.find("vertex 4"), 8, "vertex 4000000000");
   EXPECT_TRUE(contains(load_error("huge.ply", huge), "more than the file's"));
