@@ -310,10 +310,19 @@ void check_off_structure(const std::string& path, std::uintmax_t size) {
     const std::vector<std::string> w = words(line);
     const char* text = w[0].c_str();
     long long corners = 0;
-    if (!leading_integer(text, corners) || corners < 0 ||
+    if (!leading_integer(text, corners) || corners < 3 ||
         corners > static_cast<long long>(w.size()) - 1)
       fail("face " + std::to_string(f) + " (line " + std::to_string(line_no) + ") announces '" +
-           w[0].substr(0, 24) + "' corners but lists " + std::to_string(w.size() - 1) + " numbers");
+           w[0].substr(0, 24) + "' corners but lists " + std::to_string(w.size() - 1) +
+           " numbers (a face needs 3 or more)");
+    for (long long k = 1; k <= corners; ++k) {  // OpenMesh reads exactly these as indices
+      const char* index_text = w[static_cast<std::size_t>(k)].c_str();
+      long long index = -1;
+      if (!leading_integer(index_text, index) || *index_text != '\0' || index < 0 || index >= nv)
+        fail("face " + std::to_string(f) + " (line " + std::to_string(line_no) +
+             "): out-of-range vertex index '" + w[static_cast<std::size_t>(k)].substr(0, 24) +
+             "' (the file has " + std::to_string(nv) + " vertices, numbered from 0)");
+    }
   }
 }
 

@@ -310,6 +310,10 @@ TEST(Readers, HostileOffAndObjFilesAreBadInputNamingTheLine) {
       {tet_off + "2000000000 0 1 2\n3 0 1 3\n3 1 2 3\n3 2 0 3\n",
        "face 0 (line 7) announces '2000000000' corners but lists 3"},
       {tet_off + "3 0 2 1\n", "announces 4 faces, the file ends after 1"},
+      {tet_off + "0 0 2\n3 0 2777777777777 1\n3 1 2 3\n3 2 0 3\n",
+       "face 0 (line 7) announces '0' corners"},
+      {tet_off + "3 0 2 1\n3 0 9 3\n3 1 2 3\n3 2 0 3\n",
+       "face 1 (line 8): out-of-range vertex index '9'"},
       {"OFF\n4 4 0\n0 0 0\n2 0 0\n" + std::string(40, ' ') + "\n",
        "announces 4 vertices, the file ends after 2"},
   };
