@@ -375,12 +375,7 @@ void check_obj_indices(const std::string& path) {
   }
 }
 
-/// The triangles of a PLY file's `tristrips` element (OpenMesh reads only `face`): each strip a
-/// list of vertex indices, -1 restarting it; triangle i of a strip is (s_i, s_i+1, s_i+2), every
-/// other one reversed to keep the orientation; triangles with a repeated index are skipped.
-/// ASCII and binary (either byte order). Empty when the file has no tristrips element.
-/// Throws InputError for a file that ends early or a type it does not know.
-/// A PLY header: its format and elements, read up to end_header from `in`.
+/// A PLY header: its format, elements and where its body starts.
 struct PlyHeader {
   struct Property {
     std::string type, count_type;  ///< count_type: non-empty for a list
@@ -392,6 +387,7 @@ struct PlyHeader {
   };
   std::string format;
   std::vector<Element> elements;
+  std::streamoff body = 0;  ///< the byte after end_header's line
   /// The count of element `name`, or -1 without one.
   long long count(const std::string& name) const {
     for (const Element& e : elements)
@@ -400,32 +396,14 @@ struct PlyHeader {
   }
 };
 
-PlyHeader read_ply_header(std::istream& in) {
-  PlyHeader header;
-  std::string line;
-  while (std::getline(in, line)) {
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    const std::vector<std::string> w = words(line);
-    if (w.empty()) continue;
-    if (w[0] == "end_header") break;
-    if (w[0] == "format" && w.size() > 1) header.format = w[1];
-    if (w[0] == "element" && w.size() > 2)
-      header.elements.push_back({w[1], std::atoll(w[2].c_str()), {}});
-    if (w[0] == "property" && !header.elements.empty() && w.size() > 2)
-      header.elements.back().properties.push_back(w[1] == "list" && w.size() > 4
-                                                      ? PlyHeader::Property{w[3], w[2]}
-                                                      : PlyHeader::Property{w[1], ""});
-  }
-  return header;
-}
-
-/// A PLY header OpenMesh can be trusted with: "ply", a known format, element lines with counts
-/// >= 0, property lines with known types, end_header, and element counts the file's bytes can
-/// hold (a vertex takes at least 3 bytes, a face or strip 2), elements among vertex, face,
-/// tristrips and edge. OpenMesh loops forever on a property line cut short and on some unknown
-/// elements. Throws InputError naming the line.
-void check_ply_header(const std::string& path, std::uintmax_t size) {
+/// The header of the PLY file `path` (`size` bytes), one OpenMesh can be trusted with: "ply", a
+/// known format, element lines with counts >= 0, property lines with known types, end_header,
+/// and element counts the file's bytes can hold (a vertex takes at least 3 bytes, a face or strip
+/// 2), elements among vertex, face, tristrips and edge. OpenMesh loops forever on a property
+/// line cut short and on some unknown elements. Throws InputError naming the line.
+PlyHeader read_ply_header(const std::string& path, std::uintmax_t size) {
   std::ifstream in(path, std::ios::binary);
+  PlyHeader header;
   std::string line;
   std::size_t line_no = 0;
   const auto fail = [&](const std::string& what) {
@@ -439,13 +417,10 @@ void check_ply_header(const std::string& path, std::uintmax_t size) {
     return std::find(std::begin(kTypes), std::end(kTypes), t) != std::end(kTypes);
   };
   long double least = 0;
-  bool elements = false;
   while (std::getline(in, line)) {
     ++line_no;
     if (!line.empty() && line.back() == '\r') line.pop_back();
-    std::istringstream words_in(line);
-    std::vector<std::string> w;
-    for (std::string x; words_in >> x;) w.push_back(x);
+    const std::vector<std::string> w = words(line);
     if (line_no == 1) {
       if (w.size() != 1 || w[0] != "ply") fail("not 'ply'");
       continue;
@@ -455,12 +430,14 @@ void check_ply_header(const std::string& path, std::uintmax_t size) {
       if (least > static_cast<long double>(size))
         fail("its element counts are more than the file's " + std::to_string(size) +
              " bytes can hold");
-      return;
+      header.body = in.tellg();
+      return header;
     }
     if (w[0] == "format") {
       if (w.size() != 3 || w[2] != "1.0" ||
           (w[1] != "ascii" && w[1] != "binary_little_endian" && w[1] != "binary_big_endian"))
         fail("unknown format '" + line.substr(0, 60) + "'");
+      header.format = w[1];
     } else if (w[0] == "element") {
       const char* text = w.size() == 3 ? w[2].c_str() : "";
       long long count = -1;
@@ -471,21 +448,30 @@ void check_ply_header(const std::string& path, std::uintmax_t size) {
         fail("element '" + w[1].substr(0, 24) +
              "' is none of vertex, face, tristrips, edge (the ones read)");
       least += static_cast<long double>(count) * (w[1] == "vertex" ? 3 : 2);
-      elements = true;
+      header.elements.push_back({w[1], count, {}});
     } else if (w[0] == "property") {
       const bool list = w.size() == 5 && w[1] == "list" && known(w[2]) && known(w[3]);
-      if (!elements || !(list || (w.size() == 3 && known(w[1]))))
+      if (header.elements.empty() || !(list || (w.size() == 3 && known(w[1]))))
         fail("not a property of a known type: '" + line.substr(0, 60) + "'");
+      header.elements.back().properties.push_back(list ? PlyHeader::Property{w[3], w[2]}
+                                                       : PlyHeader::Property{w[1], ""});
     } else {
       fail("unknown keyword '" + w[0].substr(0, 24) + "'");
     }
   }
   fail("the file ends before end_header");
+  return header;
 }
 
-std::vector<std::vector<std::int64_t>> read_ply_tristrips(const std::string& path) {
+/// The triangles of a PLY file's `tristrips` element (OpenMesh reads only `face`): each strip a
+/// list of vertex indices, -1 restarting it; triangle i of a strip is (s_i, s_i+1, s_i+2), every
+/// other one reversed to keep the orientation; triangles with a repeated index are skipped.
+/// ASCII and binary (either byte order). Empty when the file has no tristrips element.
+/// Throws InputError for a file that ends early or a type it does not know.
+std::vector<std::vector<std::int64_t>> read_ply_tristrips(const std::string& path,
+                                                          const PlyHeader& header) {
   std::ifstream in(path, std::ios::binary);
-  const PlyHeader header = read_ply_header(in);
+  in.seekg(header.body);
   using Element = PlyHeader::Element;
   using Property = PlyHeader::Property;
   const std::vector<Element>& elements = header.elements;
@@ -609,7 +595,7 @@ PolygonSoup read_polygon_soup(const std::string& path) {
     if (!problem.empty()) throw InputError(path + ": " + problem);
   }
   if (ext == ".off") check_off_structure(path, size);
-  if (ext == ".ply") check_ply_header(path, size);
+  const PlyHeader ply = ext == ".ply" ? read_ply_header(path, size) : PlyHeader{};
   if (ext == ".obj") check_obj_indices(path);
 
   PolygonSoup soup;
@@ -623,13 +609,11 @@ PolygonSoup read_polygon_soup(const std::string& path) {
     log = capture.text();
   }
   if (ok && ext == ".ply" && soup.polygons.empty()) {
-    soup.polygons = read_ply_tristrips(path);  // OpenMesh skips that element
-    if (!soup.polygons.empty()) log.clear();   // its complaint was about the tristrips
+    soup.polygons = read_ply_tristrips(path, ply);  // OpenMesh skips that element
+    if (!soup.polygons.empty()) log.clear();        // its complaint was about the tristrips
   }
   if (ok && ext == ".ply") {  // OpenMesh stops quietly where a file ends early
-    std::ifstream in(path, std::ios::binary);
-    const PlyHeader header = read_ply_header(in);
-    const long long vertices = header.count("vertex"), faces = header.count("face");
+    const long long vertices = ply.count("vertex"), faces = ply.count("face");
     if (vertices > static_cast<long long>(soup.points.size()) ||
         faces > static_cast<long long>(soup.polygons.size()))
       throw InputError(path + ": truncated: the header announces " + std::to_string(vertices) +
