@@ -2,7 +2,7 @@
 # executables, the Python module and a CMake package under P, so that an outside project can
 #   find_package(vdb_shell REQUIRED)
 #   target_link_libraries(app PRIVATE vdb_shell::vdb_shell)
-# The library links OpenVDB, OpenMesh and TBB privately: the package needs none of them.
+# The library links OpenVDB and TBB privately: the package needs none of them.
 include(CMakePackageConfigHelpers)
 
 set(VDB_SHELL_INSTALL_CMAKEDIR ${CMAKE_INSTALL_LIBDIR}/cmake/vdb_shell)

@@ -6,7 +6,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake ninja-build ccache pkg-config clang-format
-  libopenvdb-dev libboost-dev libtbb-dev libopenmesh-dev
+  libopenvdb-dev libboost-dev libtbb-dev
   libgtest-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev
   libopenvdb-tools gmsh tetgen
   python3-meshio python3-numpy python3-scipy python3-matplotlib

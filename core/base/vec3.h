@@ -1,6 +1,6 @@
 // vec3.h — the small double-precision 3-vector used throughout core/.
 //
-// Plain value type with the arithmetic the pipeline needs; no dependency on OpenMesh or OpenVDB
+// Plain value type with the arithmetic the pipeline needs; no dependency on OpenVDB
 // so that core/ headers stay light. All coordinates are in the input's (world) units.
 #pragma once
 

@@ -2,8 +2,7 @@
 //
 // All text is formatted with std::to_chars (locale-independent, 17 significant digits for
 // doubles, the same as printf's %.17g) into a buffer that is handed to the stream in large
-// chunks. No OpenMesh here: its mesh types cannot hold the degenerate or non-manifold triangles an
-// inner surface may have, and its writers print diagnostics instead of throwing.
+// chunks.
 #include "core/write/shell_writers.h"
 
 #include <algorithm>
