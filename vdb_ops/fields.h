@@ -211,6 +211,16 @@ void write_grids(const std::string& path, const Fields& fields,
                  const std::map<std::string, std::string>& metadata,
                  const TraceResult* traces = nullptr);
 
+/// Peak bytes write_grids() allocates besides what it is given, per byte of the grids
+/// (FieldStats::grid_bytes): OpenVDB's writer buffers each grid while it serializes it (measured
+/// 0.5-1.0 times the grids' memory on fandisk, fertility, box, torus, bowl, flap).
+inline constexpr double kGridWriteFactor = 1.5;
+
+/// Estimated peak bytes write_grids(path, fields, metadata, traces) allocates: the grids'
+/// buffers (kGridWriteFactor) and the `traces` points grid (estimate_trace_points_bytes(),
+/// vdb_ops/trace_points.h).
+std::size_t estimate_write_grids_bytes(const Fields& fields, const TraceResult* traces);
+
 /// A grid of a .vdb file as the OpenVDB reader sees it (for tests, the CLI and round trips).
 struct VdbGridInfo {
   std::string name;
