@@ -84,8 +84,10 @@ struct FieldOptions {
   int resolution = 128;
   /// Voxel edge length, world units. When > 0 it overrides `resolution`.
   double voxel_size = 0.0;
-  /// Memory budget of the field build, GiB (2^30 bytes). The build's peak is estimated before
-  /// anything is allocated; a larger estimate is refused with ResourceError.
+  /// Memory budget of the run, GiB (2^30 bytes; --max-memory). The build's peak is estimated
+  /// before anything is allocated; a larger estimate is refused with ResourceError. The later
+  /// stages of build_shell() check their own estimates against the same budget
+  /// (core/base/memory_budget.h).
   double max_memory_gb = 8.0;
   /// Smallest |flux| stored in the flux grid (average outward flux, dimensionless). Smaller values
   /// read as 0. Keep it at most half the tracer's medial threshold rho (default rho 0.1).
