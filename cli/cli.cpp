@@ -451,8 +451,9 @@ void register_options(CLI::App& app, CliOptions& opt) {
                  "Voxel size in input units; overrides --resolution (0: use --resolution)")
       ->check(CLI::NonNegativeNumber)
       ->group(fg);
-  app.add_option("--max-memory", opt.shell.fields.max_memory_gb,
-                 "Refuse field builds estimated above this many GiB")
+  app.add_option(
+         "--max-memory", opt.shell.fields.max_memory_gb,
+         "Memory budget, GiB: every stage estimates its peak first and refuses to start above it")
       ->check(CLI::PositiveNumber)
       ->group(fg);
   app.add_option("--grids", opt.grids,

@@ -13,12 +13,14 @@
 #include <sstream>
 #include <utility>
 
+#include "core/base/memory_budget.h"
 #include "core/base/timer.h"
 #include "core/inner/sectors.h"
 #include "core/validity/sector_shell.h"
 #include "core/write/shell_writers.h"
 #include "core/write/trace_writer.h"
 #include "vdb_ops/point_index_vdb.h"
+#include "vdb_ops/trace_points.h"
 
 namespace vdb_shell {
 namespace {
@@ -97,6 +99,51 @@ void check_level_set_sign(const LoadedSurface& surface, const FieldSampler& fiel
                    "); vdb_shell needs OpenVDB's convention, negative inside: negate the grid");
 }
 
+// Memory held between stages, bytes (the buffers of each container: core/base/memory_budget.h).
+
+std::size_t memory_bytes(const SurfaceMesh& m) {
+  return bytes_of(m.points) + bytes_of(m.triangles);
+}
+
+std::size_t memory_bytes(const TetMesh& m) {
+  return bytes_of(m.points) + bytes_of(m.tets) + bytes_of(m.quality) + bytes_of(m.source_triangle) +
+         bytes_of(m.inner) + bytes_of(m.thickness) + bytes_of(m.surface_vertex);
+}
+
+std::size_t memory_bytes(const SectorSplit& s) {
+  return memory_bytes(s.surface) + bytes_of(s.vertex) + bytes_of(s.direction) +
+         bytes_of(s.constraints) + bytes_of(s.folded) + bytes_of(s.unsplit) +
+         bytes_of(s.boundaries);
+}
+
+std::size_t memory_bytes(const InnerVertices& in) {
+  return bytes_of(in.input.inner_points) + bytes_of(in.input.inner_id) +
+         bytes_of(in.input.cap_faces) + bytes_of(in.input.cap_points) + bytes_of(in.arc) +
+         bytes_of(in.limit) + bytes_of(in.constraints);
+}
+
+/// The fields a result holds, bytes (0 unless kept).
+std::size_t fields_bytes(const ShellResult& r) { return r.fields ? r.field_stats.grid_bytes : 0; }
+
+/// What a finished result holds while it is written, bytes: the result (shell, inner surface,
+/// surface, traces, kept fields) and the caller's surface (as large as the result's copy).
+std::size_t result_bytes(const ShellResult& r) {
+  return 2 * memory_bytes(r.surface) + memory_bytes(r.mesh) + memory_bytes(r.inner_surface) +
+         memory_bytes(r.traces) + fields_bytes(r);
+}
+
+/// MemoryEstimates::write_shell and ::write_fields of a result.
+std::size_t write_shell_estimate(const ShellResult& r) {
+  return kProgramBytes + result_bytes(r) + estimate_write_bytes(r.mesh);
+}
+std::size_t write_fields_estimate(const ShellResult& r) {
+  return r.fields
+             ? kProgramBytes + result_bytes(r) + estimate_write_grids_bytes(*r.fields, &r.traces)
+             : 0;
+}
+
+std::string count(std::size_t n, const char* what) { return std::to_string(n) + " " + what; }
+
 /// The inner side as a surface; a vertex kept on the surface is its own inner vertex.
 SurfaceMesh inner_surface_of(const SurfaceMesh& mesh, const ShellInput& input) {
   SurfaceMesh inner;
@@ -118,6 +165,15 @@ ShellResult run(const LoadedSurface& surface, const ShellOptions& options,
   const auto t_total = Clock::now();
   const SurfaceMesh& mesh = surface.mesh;
   ShellResult r;
+  MemoryEstimates& memory = r.memory;
+  const std::size_t budget = memory.budget = budget_bytes(options.fields.max_memory_gb);
+  // Every estimate counts the program and the surface twice: the caller's and the result's copy.
+  const std::size_t surfaces = kProgramBytes + 2 * memory_bytes(mesh);
+  memory.surface = surfaces;
+  check_memory_budget("surface", memory.surface, budget,
+                      "the program and the surface (" + count(mesh.points.size(), "vertices") +
+                          ", " + count(mesh.triangles.size(), "faces") + ", with the run's copy)",
+                      "give a surface with fewer faces or raise --max-memory");
   r.options = options;
   r.input = {surface.source, surface.stats, surface.flipped};
   r.surface = mesh;
@@ -143,6 +199,8 @@ ShellResult run(const LoadedSurface& surface, const ShellOptions& options,
     r.timings.fields = seconds_since(t0);
   }
   r.field_stats = fields->stats();
+  memory.fields = r.field_stats.estimated_bytes;
+  const std::size_t grids = r.field_stats.grid_bytes;
   r.notices.insert(r.notices.end(), r.field_stats.notices.begin(), r.field_stats.notices.end());
   if (options.keep_fields) r.fields = fields;
 
@@ -150,10 +208,23 @@ ShellResult run(const LoadedSurface& surface, const ShellOptions& options,
     const auto t0 = Clock::now();
     StageMonitor monitor(control, "trace");
     ActiveStage active(monitor);
-    r.traces = trace_paths(mesh, *fields, options.trace, make_vdb_point_index, monitor);
     // Folded vertices: their fans split into sectors, each traced from the vertex along its
     // own inward direction (core/inner/sectors.h).
     if (!options.traces_only) split = split_folded_vertices(mesh);
+    // The traces of the split surface (retrace_split()) peak at the same bytes per sample as
+    // trace_paths(), for as many traces as the split surface has points.
+    const TraceEstimate estimate = estimate_traces(mesh, *fields, options.trace);
+    const double traces = double(split.empty() ? mesh.points.size() : split.surface.points.size());
+    memory.trace = surfaces + grids + memory_bytes(split) +
+                   static_cast<std::size_t>(double(estimate.bytes) * traces /
+                                            double(std::max<std::size_t>(estimate.traces, 1)));
+    check_memory_budget("trace", memory.trace, budget,
+                        "the traces (" + count(std::size_t(traces), "traces") + " x about " +
+                            std::to_string(std::llround(estimate.samples_per_trace)) +
+                            " samples, from " + std::to_string(estimate.pilot_traces) +
+                            " traced ahead), with " + format_gib(double(grids)) + " of fields held",
+                        "lower --resolution or raise --step, or raise --max-memory");
+    r.traces = trace_paths(mesh, *fields, options.trace, make_vdb_point_index, monitor);
     if (!split.empty())
       split_traces = retrace_split(r.traces, split.surface, split.vertex, split.direction, *fields,
                                    options.trace);
@@ -162,6 +233,7 @@ ShellResult run(const LoadedSurface& surface, const ShellOptions& options,
   }
   if (!options.keep_fields) fields.reset();  // the fields are not needed past the traces
   if (options.traces_only) {
+    memory.write_fields = write_fields_estimate(r);
     r.timings.total = seconds_since(t_total);
     return r;
   }
@@ -169,10 +241,20 @@ ShellResult run(const LoadedSurface& surface, const ShellOptions& options,
   // The shell is built on the split surface (the input where nothing is folded).
   const SurfaceMesh& work = split.empty() ? mesh : split.surface;
   const TraceResult& work_traces = split.empty() ? r.traces : split_traces;
+  // Held from here on: the traces (and the split surface's), the fields only when kept.
+  const std::size_t traces_held =
+      memory_bytes(r.traces) + memory_bytes(split_traces) + memory_bytes(split);
+  const std::size_t held = surfaces + fields_bytes(r) + traces_held;
+  const std::string with_traces = ", with " + format_gib(double(traces_held)) + " of traces held";
   InnerVertices inner;
   {
     const auto t0 = Clock::now();
     StageMonitor monitor(control, "inner");
+    memory.inner = held + estimate_inner_bytes(work);
+    check_memory_budget(
+        "inner", memory.inner, budget,
+        "the inner vertices of " + count(work.points.size(), "traces") + with_traces,
+        "lower --resolution or raise --step (shorter traces), or raise --max-memory");
     inner = place_inner_vertices(work, work_traces, options.thickness, split.vertex);
     inner.constraints = split.constraints;
     monitor.finish();
@@ -182,6 +264,16 @@ ShellResult run(const LoadedSurface& surface, const ShellOptions& options,
     const auto t0 = Clock::now();
     StageMonitor monitor(control, "validity");
     ActiveStage active(monitor);
+    const std::size_t search = estimate_validity_bytes(work);
+    memory.validity = held + memory_bytes(inner) + search;
+    check_memory_budget(
+        "validity", memory.validity, budget,
+        "the validity search and the shell (" + count(work.triangles.size(), "prisms") +
+            ", up to " + count(3 * work.triangles.size(), "tets") + ")" + with_traces,
+        search >= traces_held
+            ? "give a surface with fewer faces, or raise --max-memory"
+            : "lower --resolution or raise --step (shorter traces), or give a surface with fewer "
+              "faces, or raise --max-memory");
     ValidShell valid = make_valid_shell(work, work_traces, inner, options.validity, monitor);
     if (valid.checks.valid() && !split.empty()) {
       const SectorShell sectors = join_sectors(mesh, split, valid, options.validity.min_quality);
@@ -214,6 +306,8 @@ ShellResult run(const LoadedSurface& surface, const ShellOptions& options,
     r.inner_surface = inner_surface_of(work, valid.input);
     r.mesh = std::move(valid.shell.mesh);
   }
+  memory.write_shell = write_shell_estimate(r);
+  memory.write_fields = write_fields_estimate(r);
   r.timings.total = seconds_since(t_total);
   return r;
 }
@@ -344,6 +438,16 @@ std::string report_json(const ShellResult& r, const ReportFiles& files, double r
                     {"non_positive", q.non_positive},
                     {"histogram", q.histogram}};
   }
+  const MemoryEstimates& m = r.memory;
+  const auto gib = [](std::size_t bytes) { return double(bytes) / kBytesPerGiB; };
+  j["memory_gb"] = {{"budget", gib(m.budget)},
+                    {"surface", gib(m.surface)},
+                    {"fields", gib(m.fields)},
+                    {"trace", gib(m.trace)},
+                    {"inner", gib(m.inner)},
+                    {"validity", gib(m.validity)},
+                    {"write_shell", gib(m.write_shell)},
+                    {"write_fields", gib(m.write_fields)}};
   const StageTimings& t = r.timings;
   j["timings_s"] = {{"read", read_seconds},
                     {"fields", t.fields},
@@ -358,6 +462,12 @@ std::string report_json(const ShellResult& r, const ReportFiles& files, double r
 void write_shell(const std::string& path, const ShellResult& result, int msh_version) {
   if (result.options.traces_only)
     throw InputError(path + ": the run stopped after the traces (traces_only): no shell to write");
+  check_memory_budget("write", write_shell_estimate(result),
+                      budget_bytes(result.options.fields.max_memory_gb),
+                      "writing the shell (" + count(result.mesh.tets.size(), "tets") + ", " +
+                          count(result.mesh.points.size(), "points") + "), with " +
+                          format_gib(double(result_bytes(result))) + " of results held",
+                      "lower --resolution or raise --step, or raise --max-memory");
   write_tet_mesh(path, result.mesh, tet_format_from_path(path, msh_version));
 }
 
@@ -376,6 +486,12 @@ void write_fields(const std::string& path, const ShellResult& result) {
     throw InputError(path +
                      ": the result holds no fields; build it with "
                      "ShellOptions::keep_fields");
+  check_memory_budget(
+      "write", write_fields_estimate(result), budget_bytes(result.options.fields.max_memory_gb),
+      "writing the grids and the traces grid (" +
+          count(trace_point_count(result.traces), "points") + ") of " + path + ", with " +
+          format_gib(double(result_bytes(result))) + " of fields and results held",
+      "lower --resolution or raise --step, or raise --max-memory");
   write_grids(path, *result.fields, result.fields->parameters(), &result.traces);
 }
 

@@ -141,7 +141,8 @@ const std::vector<OptionSpec>& option_specs() {
        "voxel edge, input units; overrides resolution (0: use resolution)",
        [](ShellOptions& o, py::handle v, const char* n) { o.fields.voxel_size = to_float(v, n); },
        [](const ShellOptions& o) { return number_text(o.fields.voxel_size); }},
-      {"max_memory", "--max-memory", "refuse field builds estimated above this many GiB",
+      {"max_memory", "--max-memory",
+       "memory budget, GiB: every stage estimates its peak first and refuses to start above it",
        [](ShellOptions& o, py::handle v, const char* n) {
          o.fields.max_memory_gb = to_float(v, n);
        },

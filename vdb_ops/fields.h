@@ -84,8 +84,10 @@ struct FieldOptions {
   int resolution = 128;
   /// Voxel edge length, world units. When > 0 it overrides `resolution`.
   double voxel_size = 0.0;
-  /// Memory budget of the field build, GiB (2^30 bytes). The build's peak is estimated before
-  /// anything is allocated; a larger estimate is refused with ResourceError.
+  /// Memory budget of the run, GiB (2^30 bytes; --max-memory). The build's peak is estimated
+  /// before anything is allocated; a larger estimate is refused with ResourceError. The later
+  /// stages of build_shell() check their own estimates against the same budget
+  /// (core/base/memory_budget.h).
   double max_memory_gb = 8.0;
   /// Smallest |flux| stored in the flux grid (average outward flux, dimensionless). Smaller values
   /// read as 0. Keep it at most half the tracer's medial threshold rho (default rho 0.1).
@@ -210,6 +212,16 @@ std::unique_ptr<Fields> fields_from_level_set(const std::string& vdb_path,
 void write_grids(const std::string& path, const Fields& fields,
                  const std::map<std::string, std::string>& metadata,
                  const TraceResult* traces = nullptr);
+
+/// Peak bytes write_grids() allocates besides what it is given, per byte of the grids
+/// (FieldStats::grid_bytes): OpenVDB's writer buffers each grid while it serializes it (measured
+/// 0.5-1.0 times the grids' memory on fandisk, fertility, box, torus, bowl, flap).
+inline constexpr double kGridWriteFactor = 1.5;
+
+/// Estimated peak bytes write_grids(path, fields, metadata, traces) allocates: the grids'
+/// buffers (kGridWriteFactor) and the `traces` points grid (estimate_trace_points_bytes(),
+/// vdb_ops/trace_points.h).
+std::size_t estimate_write_grids_bytes(const Fields& fields, const TraceResult* traces);
 
 /// A grid of a .vdb file as the OpenVDB reader sees it (for tests, the CLI and round trips).
 struct VdbGridInfo {

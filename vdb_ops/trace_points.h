@@ -45,6 +45,16 @@ const std::vector<std::pair<std::string, std::string>>& trace_points_metadata();
 /// Points the `traces` grid holds for `traces`: the sum over traces of (end + 1).
 std::size_t trace_point_count(const TraceResult& traces);
 
+/// Peak bytes per point of write_grids()'s `traces` grid: the gathered arrays (44 bytes), the
+/// point index grid and the partitioner's order, and the grid's own attributes (32 bytes); the
+/// fields are shared, not copied.
+inline constexpr std::size_t kTracePointBytes = 128;
+
+/// Estimated peak bytes write_grids() allocates for the `traces` grid of `traces`.
+inline std::size_t estimate_trace_points_bytes(const TraceResult& traces) {
+  return trace_point_count(traces) * kTracePointBytes;
+}
+
 /// The `traces` grid of a .vdb file as plain arrays, one entry per point in stored order.
 struct TracePoints {
   std::vector<Vec3d> positions;                 ///< world units

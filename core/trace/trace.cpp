@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "core/base/errors.h"
+#include "core/base/memory_budget.h"
 #include "core/base/parallel.h"
 #include "core/base/timer.h"
 
@@ -108,6 +109,15 @@ void trace_one(FieldProbe& probe, const Vec3d& p, bool planar, const TraceOption
     prev_g = g;
     q = next;
   }
+}
+
+/// Whether a vertex with these unit face normals is planar: every two within the angle whose
+/// cosine is `cos_max`.
+bool planar_fan(const std::vector<Vec3d>& normals, double cos_max) {
+  for (std::size_t a = 0; a < normals.size(); ++a)
+    for (std::size_t b = a + 1; b < normals.size(); ++b)
+      if (dot(normals[a], normals[b]) < cos_max) return false;
+  return true;
 }
 
 /// Direction of trace v at its sample i (unit, or zero for a single-sample trace).
@@ -367,16 +377,53 @@ std::vector<std::uint8_t> classify_vertices(const SurfaceMesh& mesh, double plan
     for (std::uint32_t v : mesh.triangles[f]) normals[v].push_back(n);
   }
   std::vector<std::uint8_t> planar(mesh.points.size(), 1);
-  for_each_index(mesh.points.size(), [&](std::size_t v) {
-    const auto& ns = normals[v];
-    for (std::size_t a = 0; a < ns.size() && planar[v]; ++a)
-      for (std::size_t b = a + 1; b < ns.size(); ++b)
-        if (dot(ns[a], ns[b]) < cos_max) {
-          planar[v] = 0;
-          break;
-        }
-  });
+  for_each_index(mesh.points.size(),
+                 [&](std::size_t v) { planar[v] = planar_fan(normals[v], cos_max); });
   return planar;
+}
+
+TraceEstimate estimate_traces(const SurfaceMesh& mesh, const FieldSampler& fields,
+                              const TraceOptions& options) {
+  TraceEstimate e;
+  const std::size_t n = mesh.points.size();
+  e.traces = n;
+  if (n == 0) return e;
+  const TraceParameters par =
+      derive_trace_parameters(options, fields.voxel_size(), bounding_box(mesh));
+  // Pilot i is vertex (2i + 1) n / (2 pilots): the middle of the i-th of `pilots` equal runs.
+  const std::size_t pilots = std::min(n, kPilotTraces);
+  std::vector<std::uint32_t> pilot(pilots), slot(n, UINT32_MAX);
+  for (std::size_t i = 0; i < pilots; ++i) {
+    pilot[i] = static_cast<std::uint32_t>((2 * i + 1) * n / (2 * pilots));
+    slot[pilot[i]] = static_cast<std::uint32_t>(i);
+  }
+  std::vector<std::vector<Vec3d>> normals(pilots);  // as classify_vertices(), for the pilots
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f)
+    for (std::uint32_t v : mesh.triangles[f])
+      if (slot[v] != UINT32_MAX) normals[slot[v]].push_back(normalized(face_normal_area(mesh, f)));
+  std::vector<std::size_t> samples(pilots, 0);
+  for_each_chunk(pilots, [&](std::size_t begin, std::size_t end) {
+    const std::unique_ptr<FieldProbe> probe = fields.probe();
+    OneTrace t;
+    for (std::size_t i = begin; i < end; ++i) {
+      trace_one(*probe, mesh.points[pilot[i]], planar_fan(normals[i], par.cos_planar), options, par,
+                t);
+      samples[i] = t.samples.size();
+    }
+  });
+  double sum = 0;
+  for (const std::size_t s : samples) sum += double(s);  // in index order: deterministic
+  e.pilot_traces = pilots;
+  e.samples_per_trace = std::min(kPilotSafety * sum / double(pilots), double(par.max_steps) + 1.0);
+  const double bytes = double(n) * (e.samples_per_trace * double(kTraceBytesPerSample) +
+                                    double(kTraceBytesPerTrace));
+  e.bytes = bytes >= 1e18 ? std::size_t(1e18) : static_cast<std::size_t>(bytes);
+  return e;
+}
+
+std::size_t memory_bytes(const TraceResult& t) {
+  return bytes_of(t.offsets) + bytes_of(t.samples) + bytes_of(t.arc_length) + bytes_of(t.end) +
+         bytes_of(t.stop) + bytes_of(t.planar) + bytes_of(t.merged_with);
 }
 
 TraceResult retrace_split(const TraceResult& traces, const SurfaceMesh& surface,

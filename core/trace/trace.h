@@ -94,6 +94,44 @@ struct TraceResult {
   }
 };
 
+/// Peak bytes per trace sample while trace_paths() runs: the samples being traced (a position
+/// and an arc length, 32 bytes, in rows that grow by doubling: at most 64) and their packed copy
+/// in the TraceResult (32). retrace_split() peaks at the same per sample: the traced result, the
+/// rows and their packed copy. Measured: 77-90 bytes per sample at the peak of the trace stage
+/// (fandisk, fertility, spot, sphere, torus, box at resolutions 64 to 512).
+inline constexpr std::size_t kTraceBytesPerSample = 96;
+/// Peak bytes per trace besides its samples: its row, the packed per-trace arrays, the
+/// classification's face normals (transient) and the merge phase's lists.
+inline constexpr std::size_t kTraceBytesPerTrace = 384;
+/// Vertices estimate_traces() traces ahead (all of them when there are fewer).
+inline constexpr std::size_t kPilotTraces = 256;
+/// Factor on the pilot traces' mean samples per trace (a mean over 256 of thousands of traces).
+inline constexpr double kPilotSafety = 1.25;
+
+/// What trace_paths() will allocate, estimated before it runs.
+struct TraceEstimate {
+  std::size_t traces = 0;        ///< surface vertices
+  std::size_t pilot_traces = 0;  ///< vertices traced for the estimate
+  /// Samples per trace: the pilot traces' mean times kPilotSafety, at most max_steps + 1.
+  double samples_per_trace = 0;
+  /// Peak bytes of trace_paths(): traces * (samples_per_trace * kTraceBytesPerSample +
+  /// kTraceBytesPerTrace).
+  std::size_t bytes = 0;
+};
+
+/// Estimates the peak memory of trace_paths(mesh, fields, options) before it runs. How many
+/// samples a trace takes depends on how it creeps towards the medial surface, where the gradient
+/// shrinks (measured: 2 to 3.5 times its depth in steps), so it is measured: kPilotTraces
+/// vertices spread evenly over the vertex indices are traced first, exactly as trace_paths()
+/// traces them (merges only end traces earlier; their samples are kept). Allocates the pilot
+/// traces and 4 bytes per vertex. Parameters as trace_paths().
+/// 	hrow InputError as derive_trace_parameters().
+TraceEstimate estimate_traces(const SurfaceMesh& mesh, const FieldSampler& fields,
+                              const TraceOptions& options);
+
+/// Bytes the vectors of `traces` hold.
+std::size_t memory_bytes(const TraceResult& traces);
+
 /// Traces every vertex of `mesh` through `fields` and resolves merges. Reports the fraction of
 /// traces done to `monitor` (tracing is 80% of the stage, merging the rest) and checks it.
 TraceResult trace_paths(const SurfaceMesh& mesh, const FieldSampler& fields,

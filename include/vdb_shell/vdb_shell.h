@@ -16,9 +16,11 @@
 //
 // Errors (core/base/errors.h): InputError for a surface or options that cannot be used (the message
 // names the source, the first offending element and the fix); ResourceError for memory budgets
-// and files; InternalError if a shell broke an invariant (a bug: please report the input);
-// CancelledError when RunControl::cancel was set. A failed call writes nothing and changes no
-// argument. The call keeps no global state: several may run at once on different threads.
+// (every stage estimates its peak before it allocates and refuses one above
+// ShellOptions::fields.max_memory_gb, naming the stage: core/base/memory_budget.h) and files;
+// InternalError if a shell broke an invariant (a bug: please report the input); CancelledError when
+// RunControl::cancel was set. A failed call writes nothing and changes no argument. The call keeps
+// no global state: several may run at once on different threads.
 #pragma once
 
 #include <cstddef>
@@ -102,6 +104,20 @@ struct ShellCounts {
   std::size_t thickness_limited_vertices = 0;  ///< vertices a thickness limit shortened
 };
 
+/// The memory estimates of a run, bytes (core/base/memory_budget.h): each stage's estimated peak
+/// — what it allocates, what earlier stages still hold and the program itself — which the stage
+/// compared with the budget (--max-memory) before it allocated. 0: the stage did not run.
+struct MemoryEstimates {
+  std::size_t budget = 0;        ///< ShellOptions::fields.max_memory_gb in bytes
+  std::size_t surface = 0;       ///< the program, the caller's surface and the run's copy of it
+  std::size_t fields = 0;        ///< plan_fields()'s estimate (FieldStats::estimated_bytes)
+  std::size_t trace = 0;         ///< the traces (estimate_traces()), with the fields held
+  std::size_t inner = 0;         ///< the inner vertices, with the traces held
+  std::size_t validity = 0;      ///< the validity search and the assembled shell, traces held
+  std::size_t write_shell = 0;   ///< write_shell() of this result (the result held)
+  std::size_t write_fields = 0;  ///< write_fields() of this result (0 without keep_fields)
+};
+
 /// Seconds per stage (wall time of this call; reading and writing files are the caller's).
 struct StageTimings {
   double fields = 0;
@@ -134,6 +150,7 @@ struct ShellResult {
   ValidityReport validity;
   QualitySummary quality;  ///< histogram, min/median/mean Q, coverage, volume
   StageTimings timings;
+  MemoryEstimates memory;  ///< every stage's estimated peak, checked against --max-memory
   /// Every notice of the run, one sentence each: validation's (flipped, triangulated, dropped
   /// vertices) first, then the fields' (interior filled by fast sweeping, ...).
   std::vector<std::string> notices;
@@ -173,7 +190,9 @@ std::string report_json(const ShellResult& result, const ReportFiles& files = {}
 
 /// Writes the shell to `path`, format from its extension (.vtu .vtk .msh .mesh .ele; .msh as
 /// Gmsh `msh_version` 41 or 22), atomically (core/write/shell_writers.h).
-/// \throw InputError for an unknown extension; ResourceError if the file cannot be written.
+/// \throw InputError for an unknown extension; ResourceError if the file cannot be written, or
+///        (before anything is written) if the result held and the writer's own memory are
+///        estimated above result.options.fields.max_memory_gb (MemoryEstimates::write_shell).
 void write_shell(const std::string& path, const ShellResult& result, int msh_version = 41);
 
 /// Writes the inner surface (.obj .ply .off), atomically.
@@ -183,7 +202,8 @@ void write_inner_surface(const std::string& path, const ShellResult& result);
 void write_traces(const std::string& path, const ShellResult& result);
 
 /// Writes the fields and the traces to a .vdb file (write_grids()).
-/// \throw InputError if the result holds no fields (run with ShellOptions::keep_fields).
+/// \throw InputError if the result holds no fields (run with ShellOptions::keep_fields);
+///        ResourceError as write_shell() (MemoryEstimates::write_fields: the traces grid).
 void write_fields(const std::string& path, const ShellResult& result);
 
 }  // namespace vdb_shell

@@ -228,10 +228,13 @@ TEST_F(CliOptionEffects, TimeoutGivesUpWithExit3AndNothingWritten) {
 }
 
 TEST_F(CliOptionEffects, MaxMemoryRefusesTheFieldBuild) {
-  // A resource limit, not bad input: exit 3 (docs/usage.md), the fitting resolution named.
-  const CliRun r = cli({star(), "-o", file("s.vtu"), "-r", "32", "--max-memory", "0.000001"});
+  // A resource limit, not bad input: exit 3 (docs/usage.md), the fitting resolution named. The
+  // budget holds the program and the surface (the check before the fields').
+  const CliRun r = cli({star(), "-o", file("s.vtu"), "-r", "4096", "--max-memory", "0.1"});
   EXPECT_EQ(r.code, 3);
-  EXPECT_NE(r.err.find("--max-memory"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("fields: about "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("more than --max-memory 0.1 GiB"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(" fits)"), std::string::npos) << r.err;
   EXPECT_TRUE(r.out.empty()) << r.out;
   EXPECT_TRUE(fs::is_empty(local_.path()));
   EXPECT_EQ(cli({star(), "-o", file("s.vtu"), "-r", "32", "--max-memory", "1", "-q"}).code, 0);

@@ -15,8 +15,13 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <nlohmann/json.hpp>
+
+#include "assets/shapes.h"
 #include "cli/cli.h"
+#include "core/base/memory_budget.h"
 #include "core/write/atomic_file.h"
+#include "core/write/shell_writers.h"
 #include "tests/test_support.h"
 
 namespace vdb_shell {
@@ -175,6 +180,52 @@ TEST(CliBatch, Exit2IfEveryFailureIsBadInputElse3) {
   EXPECT_NE(lines[0].find("\terror\t"), std::string::npos) << lines[0];
   EXPECT_NE(lines[0].find("--max-memory"), std::string::npos) << lines[0];
   EXPECT_TRUE(files_below(dir.file("o")).empty());
+}
+
+TEST(CliMemory, AStageOverTheBudgetExits3NamingItAndWritesNothing) {
+  TempDir dir;
+  const std::string in = dir.file("sphere.obj");
+  write_surface(in, make_shape("sphere", 1));
+  // Long traces (an eighth of a voxel per step) on a small field: the traces, then the --grids
+  // file's points, outgrow every stage before them.
+  const std::vector<std::string> run = {
+      in,  "-r", "16", "--step", "0.0078125", "-o", dir.file("s.vtu"), "--grids", dir.file("g.vdb"),
+      "-q"};
+  auto with = [&](std::vector<std::string> extra) {
+    std::vector<std::string> args = run;
+    args.insert(args.end(), extra.begin(), extra.end());
+    return cli(args);
+  };
+  // A run within the budget reports every estimate, byte for byte (bytes / 2^30 are exact).
+  ASSERT_EQ(with({"--report", dir.file("r.json")}).code, 0);
+  const nlohmann::json memory =
+      nlohmann::json::parse(test::read_text(dir.file("r.json")))["memory_gb"];
+  for (const char* file : {"s.vtu", "g.vdb", "r.json"}) std::filesystem::remove(dir.file(file));
+  ASSERT_EQ(files_below(dir.path()), std::vector<std::string>{"sphere.obj"});
+  const auto bytes = [&](const char* key) {
+    return static_cast<std::size_t>(memory[key].get<double>() * kBytesPerGiB);
+  };
+  // In the order the checks run; the two tested are each larger than every check before them.
+  std::size_t earlier = 0;
+  for (const char* key :
+       {"surface", "fields", "trace", "inner", "validity", "write_shell", "write_fields"}) {
+    const std::string stage = std::string(key) == "trace"          ? "trace"
+                              : std::string(key) == "write_fields" ? "write"
+                                                                   : "";
+    if (!stage.empty()) {
+      ASSERT_GT(bytes(key), earlier) << key << " does not outgrow the checks before it";
+      std::ostringstream below;
+      below.precision(17);
+      below << double(bytes(key) - 1) / kBytesPerGiB;
+      const InProcess r = with({"--max-memory", below.str()});
+      EXPECT_EQ(r.code, 3) << key << ": " << r.err;
+      EXPECT_EQ(r.err.rfind("vdb_shell: error: " + stage + ": about ", 0), 0u) << r.err;
+      EXPECT_NE(r.err.find("more than --max-memory"), std::string::npos) << r.err;
+      EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+      EXPECT_EQ(files_below(dir.path()), std::vector<std::string>{"sphere.obj"}) << key;
+    }
+    earlier = std::max(earlier, bytes(key));
+  }
 }
 
 TEST(CliBatch, OutputMustBeAFolder) {

@@ -6,6 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <atomic>
 #include <filesystem>
 #include <limits>
@@ -16,6 +17,7 @@
 #include <vector>
 
 #include "assets/shapes.h"
+#include "core/base/memory_budget.h"
 #include "core/write/shell_writers.h"
 #include "tests/test_support.h"
 #include "vdb_shell/vdb_shell.h"
@@ -77,6 +79,14 @@ TEST(Pipeline, ReportHasEveryDocumentedKey) {
                           "/timings_s/assemble",
                           "/timings_s/check",
                           "/timings_s/write",
+                          "/memory_gb/budget",
+                          "/memory_gb/surface",
+                          "/memory_gb/fields",
+                          "/memory_gb/trace",
+                          "/memory_gb/inner",
+                          "/memory_gb/validity",
+                          "/memory_gb/write_shell",
+                          "/memory_gb/write_fields",
                           "/timings_s/total"})
     EXPECT_TRUE(j.contains(nlohmann::json::json_pointer(key))) << key;
   EXPECT_EQ(j["input"]["file"], "horn");
@@ -95,6 +105,8 @@ TEST(Pipeline, ReportHasEveryDocumentedKey) {
   EXPECT_EQ(r.mesh.thickness.size(), r.mesh.points.size());
   EXPECT_EQ(r.inner_surface.triangles.size(), 408u);
   EXPECT_EQ(r.traces.num_traces(), r.surface.points.size());
+  EXPECT_EQ(j["memory_gb"]["budget"].get<double>(), 8.0);
+  EXPECT_EQ(j["memory_gb"]["validity"].get<double>() * kBytesPerGiB, r.memory.validity);
 }
 
 TEST(Pipeline, CoarsePaperShapesAreValidAndFull) {
@@ -514,6 +526,135 @@ TEST(Pipeline, SharedMeshesRunEndToEnd) {
     EXPECT_EQ(r.traces.stops(StopReason::kCap), 0u) << name;
     EXPECT_GT(test::independent_coverage(s.mesh, r.mesh), 0.5) << name;
   }
+}
+
+// --- --max-memory: every stage checks its estimate before it allocates -------------------------
+
+/// `bytes` as --max-memory GiB, exactly (a byte count over 2^30 is exact in a double).
+double gib(std::size_t bytes) { return double(bytes) / kBytesPerGiB; }
+
+/// The estimates of a run on `mesh` with a budget no stage reaches.
+MemoryEstimates estimates_of(const SurfaceMesh& mesh, ShellOptions options) {
+  options.fields.max_memory_gb = 64;
+  return build_shell(mesh, options).memory;
+}
+
+/// The stage whose memory check refuses a run on `mesh` with a budget of `bytes`, or "" when the
+/// run succeeds.
+std::string stage_refusing(const SurfaceMesh& mesh, ShellOptions options, std::size_t bytes) {
+  options.fields.max_memory_gb = gib(bytes);
+  try {
+    build_shell(mesh, options);
+    return "";
+  } catch (const ResourceError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("more than --max-memory"), std::string::npos) << m;
+    return m.substr(0, m.find(':'));
+  }
+}
+
+TEST(PipelineMemory, EachStageRefusesABudgetOneByteBelowItsEstimate) {
+  // Each case makes one stage's estimate the largest so far; a budget one byte below it passes
+  // every earlier check and stops there, a budget of exactly it passes that stage too.
+  struct Case {
+    std::string stage;
+    SurfaceMesh mesh;
+    ShellOptions options;
+  };
+  std::vector<Case> cases;
+  cases.push_back({"surface", make_shape("box", 2), at_resolution(16)});
+  ShellOptions long_traces = at_resolution(16);  // many samples, a small field
+  long_traces.trace.step = 1.0 / 128.0;          // an eighth of a voxel
+  cases.push_back({"trace", make_shape("sphere", 1), long_traces});
+  cases.push_back({"validity", make_shape("torus", 2), at_resolution(16)});
+  const std::vector<std::pair<std::string, std::size_t MemoryEstimates::*>> order = {
+      {"surface", &MemoryEstimates::surface},
+      {"fields", &MemoryEstimates::fields},
+      {"trace", &MemoryEstimates::trace},
+      {"inner", &MemoryEstimates::inner},
+      {"validity", &MemoryEstimates::validity}};
+  for (const Case& c : cases) {
+    const MemoryEstimates e = estimates_of(c.mesh, c.options);
+    std::size_t earlier = 0, estimate = 0;
+    for (const auto& [stage, member] : order) {
+      if (stage == c.stage) {
+        estimate = e.*member;
+        break;
+      }
+      earlier = std::max(earlier, e.*member);
+    }
+    ASSERT_GT(estimate, earlier) << c.stage << ": the case does not isolate the stage";
+    EXPECT_EQ(stage_refusing(c.mesh, c.options, estimate - 1), c.stage);
+    EXPECT_NE(stage_refusing(c.mesh, c.options, estimate), c.stage);
+    // The inner vertices hold less than the traces did while they were made, so the inner check
+    // never refuses first: it stands for the stage's own allocation.
+    EXPECT_LT(e.inner, e.trace) << c.stage;
+    EXPECT_GT(e.inner, kProgramBytes) << c.stage;
+  }
+}
+
+TEST(PipelineMemory, TheMessageSaysWhatTheEstimateIsForAndWhatLowersIt) {
+  ShellOptions o = at_resolution(16);
+  o.trace.step = 1.0 / 128.0;
+  const SurfaceMesh sphere = make_shape("sphere", 1);
+  const MemoryEstimates e = estimates_of(sphere, o);
+  o.fields.max_memory_gb = gib(e.trace - 1);
+  try {
+    build_shell(sphere, o);
+    FAIL() << "expected ResourceError";
+  } catch (const ResourceError& err) {
+    const std::string m = err.what();
+    EXPECT_EQ(m.rfind("trace: about ", 0), 0u) << m;
+    EXPECT_NE(m.find(std::to_string(sphere.points.size()) + " traces x about"), std::string::npos)
+        << m;
+    EXPECT_NE(m.find("of fields held"), std::string::npos) << m;
+    EXPECT_NE(m.find("lower --resolution or raise --step"), std::string::npos) << m;
+  }
+}
+
+TEST(PipelineMemory, WriteShellChecksTheBudgetAndWritesNothingAboveIt) {
+  ShellOptions o = at_resolution(16);
+  o.fields.max_memory_gb = 64;
+  ShellResult r = build_shell(make_shape("torus", 1), o);
+  EXPECT_GT(r.memory.write_shell, kProgramBytes);
+  TempDir dir;
+  r.options.fields.max_memory_gb = gib(r.memory.write_shell - 1);
+  try {
+    write_shell(dir.file("s.vtu"), r);
+    FAIL() << "expected ResourceError";
+  } catch (const ResourceError& e) {
+    const std::string m = e.what();
+    EXPECT_EQ(m.rfind("write: about ", 0), 0u) << m;
+    EXPECT_NE(m.find(std::to_string(r.mesh.tets.size()) + " tets"), std::string::npos) << m;
+  }
+  EXPECT_TRUE(fs::is_empty(dir.path()));
+  r.options.fields.max_memory_gb = gib(r.memory.write_shell);
+  write_shell(dir.file("s.vtu"), r);
+  EXPECT_TRUE(fs::exists(dir.file("s.vtu")));
+}
+
+TEST(PipelineMemory, WriteFieldsChecksTheBudgetAndWritesNothingAboveIt) {
+  ShellOptions o = at_resolution(16);
+  o.fields.max_memory_gb = 64;
+  o.keep_fields = true;
+  o.traces_only = true;
+  ShellResult r = build_shell(make_shape("sphere", 1), o);
+  EXPECT_EQ(r.memory.write_shell, 0u);  // no shell: not written
+  EXPECT_GT(r.memory.write_fields, kProgramBytes + r.field_stats.grid_bytes);
+  TempDir dir;
+  r.options.fields.max_memory_gb = gib(r.memory.write_fields - 1);
+  try {
+    write_fields(dir.file("g.vdb"), r);
+    FAIL() << "expected ResourceError";
+  } catch (const ResourceError& e) {
+    const std::string m = e.what();
+    EXPECT_EQ(m.rfind("write: about ", 0), 0u) << m;
+    EXPECT_NE(m.find("traces grid"), std::string::npos) << m;
+  }
+  EXPECT_TRUE(fs::is_empty(dir.path()));
+  r.options.fields.max_memory_gb = gib(r.memory.write_fields);
+  write_fields(dir.file("g.vdb"), r);
+  EXPECT_TRUE(fs::exists(dir.file("g.vdb")));
 }
 
 TEST(PipelineCli, BadOptionsExit2AndWriteNothing) {

@@ -13,6 +13,7 @@
 #include <new>
 
 #include "core/base/errors.h"
+#include "core/base/memory_budget.h"
 #include "core/base/run_control.h"
 #include "core/base/timer.h"
 
@@ -175,11 +176,8 @@ std::unique_ptr<Fields> fields_from_level_set(const std::string& vdb_path,
       kFixedBytes + double(grid->memUsage()) +
       interior * (unfilled ? build_bytes_per_voxel(SdfMethod::kFastSweeping) : 0.0) +
       (options.store_gradient ? interior * kGradientBytesPerVoxel : 0.0);
-  if (bytes > options.max_memory_gb * kGiB) {
-    throw ResourceError("the fields of " + where + " need about " + format_gb(bytes) +
-                        ", more than --max-memory " + format_double(options.max_memory_gb) +
-                        " GiB; raise --max-memory");
-  }
+  check_memory_budget("fields", std::size_t(bytes), budget_bytes(options.max_memory_gb),
+                      "the fields of " + where, "raise --max-memory");
   FieldStats stats;
   stats.source = vdb_path + ":" + grid->getName();
   stats.estimated_bytes = std::size_t(bytes);

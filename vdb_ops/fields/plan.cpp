@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "core/base/errors.h"
+#include "core/base/memory_budget.h"
 
 namespace vdb_shell {
 namespace fields_detail {
@@ -196,18 +197,15 @@ FieldPlan plan_fields(const SurfaceMesh& mesh, const FieldOptions& options) {
   }
   plan.estimated_bytes = bytes > 1e18 ? std::size_t(1e18) : std::size_t(bytes);
 
-  const double budget = options.max_memory_gb * kGiB;
-  if (bytes > budget) {
-    const double scale = std::cbrt(budget / bytes);
-    throw ResourceError(
-        "the fields at resolution " + std::to_string(plan.resolution) + " (voxel size " +
-        format_double(h) + ") need about " + format_gb(bytes) + ", more than --max-memory " +
-        format_double(options.max_memory_gb) + " GiB; lower --resolution (about " +
-        std::to_string(int(plan.resolution * scale)) + " fits) or raise --max-memory");
-  }
+  const double scale = std::cbrt(options.max_memory_gb * kGiB / bytes);
+  check_memory_budget("fields", plan.estimated_bytes, budget_bytes(options.max_memory_gb),
+                      "the fields at resolution " + std::to_string(plan.resolution) +
+                          " (voxel size " + format_double(h) + ")",
+                      "lower --resolution (about " + std::to_string(int(plan.resolution * scale)) +
+                          " fits) or raise --max-memory");
   const double physical = physical_memory_bytes();
   if (physical > 0.0 && bytes > 0.9 * physical) {
-    throw ResourceError("the fields at resolution " + std::to_string(plan.resolution) +
+    throw ResourceError("fields: the fields at resolution " + std::to_string(plan.resolution) +
                         " need about " + format_gb(bytes) + ", more than this machine's " +
                         format_gb(physical) + " of memory; lower --resolution");
   }

@@ -178,6 +178,11 @@ void write_grids(const std::string& path, const Fields& fields,
   });
 }
 
+std::size_t estimate_write_grids_bytes(const Fields& fields, const TraceResult* traces) {
+  return static_cast<std::size_t>(kGridWriteFactor * double(fields.stats().grid_bytes)) +
+         (traces ? estimate_trace_points_bytes(*traces) : 0);
+}
+
 std::vector<VdbGridInfo> read_vdb_grid_infos(const std::string& path) {
   init_openvdb();
   require_readable(path);

@@ -124,6 +124,42 @@ TEST(Trace, SameResultForAnyThreadCount) {
   }
 }
 
+TEST(TraceEstimate, APilotOfEveryVertexCountsTheSamplesExactly) {
+  // 26 vertices: all are pilots, traced as trace_paths() traces them.
+  const SurfaceMesh box = make_shape("box", 1);
+  const auto field = test::box_field({0.5, 0.5, 0.5}, 1.0 / 64.0);
+  const TraceEstimate e = estimate_traces(box, *field, TraceOptions{});
+  const TraceResult r = trace_paths(box, *field, TraceOptions{});
+  EXPECT_EQ(e.traces, box.points.size());
+  EXPECT_EQ(e.pilot_traces, box.points.size());
+  const double mean = double(r.samples.size()) / double(r.num_traces());
+  EXPECT_DOUBLE_EQ(e.samples_per_trace, kPilotSafety * mean);
+  EXPECT_EQ(e.bytes, static_cast<std::size_t>(double(box.points.size()) *
+                                              (e.samples_per_trace * kTraceBytesPerSample +
+                                               double(kTraceBytesPerTrace))));
+}
+
+TEST(TraceEstimate, BoundsWhatTheTracesHoldWithinTwice) {
+  struct Case {
+    SurfaceMesh mesh;
+    std::unique_ptr<test::AnalyticField> field;
+  };
+  std::vector<Case> cases;
+  cases.push_back({make_shape("box", 12), test::box_field({0.5, 0.5, 0.5}, 1.0 / 64.0)});
+  cases.push_back({make_shape("sphere", 3), test::sphere_field(0.5, 1.0 / 64.0)});
+  cases.push_back({scaled(make_shape("box", 8), {2.0, 1.0, 0.5}),
+                   test::box_field({1.0, 0.5, 0.25}, 1.0 / 32.0)});
+  for (const Case& c : cases) {
+    const TraceEstimate e = estimate_traces(c.mesh, *c.field, TraceOptions{});
+    const TraceResult r = trace_paths(c.mesh, *c.field, TraceOptions{});
+    EXPECT_EQ(e.pilot_traces, std::min(c.mesh.points.size(), kPilotTraces));
+    const double mean = double(r.samples.size()) / double(r.num_traces());
+    EXPECT_GE(e.samples_per_trace, mean) << c.mesh.points.size() << " vertices";
+    EXPECT_LE(e.samples_per_trace, 2.0 * mean) << c.mesh.points.size() << " vertices";
+    EXPECT_GE(e.bytes, memory_bytes(r));  // and the rows beside them at the peak
+  }
+}
+
 TEST(Trace, OptionsAreValidated) {
   const BBox unit{{0, 0, 0}, {1, 1, 1}};
   TraceOptions bad;
