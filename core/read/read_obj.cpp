@@ -57,7 +57,7 @@ PolygonSoup read_obj(std::string_view bytes, const std::string& name) {
     for (std::size_t k = 1; k < w.size(); ++k) {
       long long index = 0;
       if (leading_integer(w[k], index) &&
-          ((index > 0 && index <= total) || (index < 0 && -index <= so_far))) {
+          ((index > 0 && index <= total) || (index < 0 && index >= -so_far))) {
         polygon.push_back(index > 0 ? index - 1 : so_far + index);
         continue;
       }

@@ -143,6 +143,31 @@ Header read_header(std::string_view bytes, const std::string& name) {
   return header;
 }
 
+/// An ASCII value `v` is one of type `t` (integers whole and in range).
+bool fits(Type t, double v) {
+  const auto whole_in = [&](double lo, double hi) {
+    return v == std::floor(v) && v >= lo && v <= hi;
+  };
+  switch (t) {
+    case Type::kInt8:
+      return whole_in(-128, 127);
+    case Type::kUint8:
+      return whole_in(0, 255);
+    case Type::kInt16:
+      return whole_in(-32768, 32767);
+    case Type::kUint16:
+      return whole_in(0, 65535);
+    case Type::kInt32:
+      return whole_in(-2147483648.0, 2147483647.0);
+    case Type::kUint32:
+      return whole_in(0, 4294967295.0);
+    case Type::kFloat32:
+    case Type::kFloat64:
+      return true;  // NaN and Inf are caught as coordinates
+  }
+  return true;
+}
+
 /// The values of a PLY body, one at a time, as doubles (every PLY type fits one exactly).
 class Body {
  public:
@@ -165,10 +190,10 @@ class Body {
       std::string_view word;
       if (!tokens_.next(word)) truncated();
       double v = 0;
-      if (!parse_number(word, v))
+      if (!parse_number(word, v) || !fits(type, v))
         fail(name_,
-             where() + " (line " + std::to_string(tokens_.line_no()) + "): unreadable value " +
-                 quoted(word),
+             where() + " (line " + std::to_string(tokens_.line_no()) + "): " + quoted(word) +
+                 " is not a value of its property's type",
              kFix);
       return v;
     }
@@ -236,8 +261,10 @@ class Body {
   /// One vertex index.
   std::int64_t index(Type type) {
     const double v = value(type);
-    if (v != std::floor(v))
-      fail(name_, where() + ": vertex index " + std::to_string(v) + " is not an integer", kFix);
+    // Indices beyond +-2^53 cannot name a vertex (and would not convert exactly).
+    if (v != std::floor(v) || std::abs(v) > 9007199254740992.0)
+      fail(name_, where() + ": vertex index " + std::to_string(v) + " is not an integer index",
+           kFix);
     return static_cast<std::int64_t>(v);
   }
 
