@@ -22,6 +22,7 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -143,6 +144,19 @@ std::unique_ptr<Fields> finish_fields(FloatGrid::Ptr sdf, const FieldOptions& op
 
 /// \throw InputError naming `path` if it is missing or not a regular file.
 void require_readable(const std::string& path);
+
+/// Picks the one grid to read from the metadata of a file's grids (returns its name).
+using GridSelector = std::function<std::string(const openvdb::GridPtrVec& metas)>;
+
+/// The grids of the .vdb file `path` — all of them, or the one `select` names — read by
+/// OpenVDB in a child process and handed back as OpenVDB's writer re-wrote them. OpenVDB 10's
+/// reader trusts the sizes stored in a file (a corrupt one overflows its buffers: the .vdb fuzz
+/// target found io::bloscFromStream copying a stored length into a node's buffer), so this
+/// process never parses the file's bytes itself, only what the writer made of the child's
+/// grids. A reader that crashes or throws takes only the child down.
+/// \throw InputError naming the file (what the reader or `select` said, or how it failed);
+///        ResourceError if the child cannot be started or ran out of memory.
+openvdb::GridPtrVecPtr read_vdb_isolated(const std::string& path, const GridSelector& select);
 
 /// Reads the float level set `grid_name` of `vdb_path` (empty name: 'surface', else the first
 /// float level set) and checks its type and class. `where` names it for messages.

@@ -6,7 +6,15 @@
 #include <openvdb/io/Stream.h>
 #include <openvdb/tools/VolumeToMesh.h>
 
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <csignal>
+#include <cstring>
 #include <filesystem>
+#include <functional>
 #include <sstream>
 
 #include "core/base/errors.h"
@@ -187,15 +195,8 @@ std::vector<VdbGridInfo> read_vdb_grid_infos(const std::string& path) {
   init_openvdb();
   require_readable(path);
   std::vector<VdbGridInfo> out;
-  try {
-    openvdb::io::File file(path);
-    file.open(false);
-    openvdb::GridPtrVecPtr grids = file.getGrids();
-    file.close();
-    for (const openvdb::GridBase::Ptr& g : *grids) out.push_back(info_of(*g));
-  } catch (const openvdb::Exception& e) {
-    throw InputError("cannot read '" + path + "' as a .vdb file: " + e.what());
-  }
+  const openvdb::GridPtrVecPtr grids = read_vdb_isolated(path, {});
+  for (const openvdb::GridBase::Ptr& g : *grids) out.push_back(info_of(*g));
   return out;
 }
 
@@ -207,6 +208,105 @@ std::vector<VdbGridInfo> grid_infos(const Fields& fields) {
 
 namespace fields_detail {
 
+namespace {
+
+/// Writes all of `bytes` to `fd`; false when the reader has gone.
+bool write_all(int fd, const std::string& bytes) {
+  for (std::size_t done = 0; done < bytes.size();) {
+    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return false;
+    done += static_cast<std::size_t>(n);
+  }
+  return true;
+}
+
+/// The child's side of read_vdb_isolated(): reads, re-writes the grids onto `fd` and exits with
+/// 0, or writes an error message and exits with 2 (bad input) or 3 (out of memory).
+[[noreturn]] void read_in_child(int fd, const std::string& path, const GridSelector& select) {
+  int code = 0;
+  std::string payload;
+  try {
+    openvdb::io::File file(path);
+    file.open(false);
+    openvdb::GridPtrVecPtr grids;
+    if (select) {
+      grids = std::make_shared<openvdb::GridPtrVec>();
+      grids->push_back(file.readGrid(select(*file.readAllGridMetadata())));
+    } else {
+      grids = file.getGrids();
+    }
+    file.close();
+    std::ostringstream out(std::ios::binary);
+    openvdb::io::Stream(out).write(*grids);
+    payload = out.str();
+  } catch (const InputError& e) {
+    code = 2;
+    payload = e.what();
+  } catch (const openvdb::Exception& e) {
+    code = 2;
+    payload = "cannot read '" + path + "' as a .vdb file: " + e.what();
+  } catch (const std::bad_alloc&) {
+    code = 3;
+    payload = "cannot read '" + path + "': out of memory";
+  } catch (const std::exception& e) {
+    code = 2;
+    payload = "cannot read '" + path + "' as a .vdb file: " + e.what();
+  }
+  write_all(fd, payload);
+  ::close(fd);
+  ::_exit(code);
+}
+
+}  // namespace
+
+openvdb::GridPtrVecPtr read_vdb_isolated(const std::string& path, const GridSelector& select) {
+  int fds[2];
+  if (::pipe(fds) != 0)
+    throw ResourceError("cannot read '" + path + "': no pipe (" + std::strerror(errno) + ")");
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    ::close(fds[0]);
+    ::close(fds[1]);
+    throw ResourceError("cannot read '" + path + "': cannot start a process (" +
+                        std::strerror(errno) + ")");
+  }
+  if (pid == 0) {
+    ::close(fds[0]);
+    read_in_child(fds[1], path, select);
+  }
+  ::close(fds[1]);
+  std::string payload;
+  char buffer[1 << 16];
+  for (;;) {
+    const ssize_t n = ::read(fds[0], buffer, sizeof buffer);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    payload.append(buffer, static_cast<std::size_t>(n));
+  }
+  ::close(fds[0]);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (WIFEXITED(status) && WEXITSTATUS(status) == 2) throw InputError(payload);
+  if (WIFEXITED(status) && WEXITSTATUS(status) == 3) throw ResourceError(payload);
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    const std::string how = WIFSIGNALED(status)
+                                ? "signal " + std::to_string(WTERMSIG(status)) + " (" +
+                                      std::string(strsignal(WTERMSIG(status))) + ")"
+                                : "exit code " + std::to_string(WEXITSTATUS(status));
+    throw InputError("cannot read '" + path + "' as a .vdb file: OpenVDB's reader failed on it (" +
+                     how + "); the file is corrupt — fix: write it again");
+  }
+  try {
+    std::istringstream in(payload, std::ios::binary);
+    return openvdb::io::Stream(in).getGrids();
+  } catch (const openvdb::Exception& e) {
+    throw InternalError("reading '" + path + "': OpenVDB cannot read back its own copy (" +
+                        e.what() + "); please report");
+  }
+}
+
 void require_readable(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) {
@@ -216,42 +316,41 @@ void require_readable(const std::string& path) {
 
 FloatGrid::Ptr read_level_set_grid(const std::string& vdb_path, const std::string& grid_name,
                                    std::string& where) {
-  openvdb::GridBase::Ptr base;
-  std::string chosen;
-  try {
-    openvdb::io::File file(vdb_path);
-    file.open(false);
-    openvdb::GridPtrVecPtr metas = file.readAllGridMetadata();
+  const auto choose = [&](const openvdb::GridPtrVec& metas) {
     std::string names;
-    for (const auto& m : *metas) names += (names.empty() ? "'" : ", '") + m->getName() + "'";
+    for (const auto& m : metas) names += (names.empty() ? "'" : ", '") + m->getName() + "'";
+    const auto named = [&](const std::string& name) {
+      return std::any_of(metas.begin(), metas.end(),
+                         [&](const auto& m) { return m->getName() == name; });
+    };
     if (!grid_name.empty()) {
-      if (!file.hasGrid(grid_name)) {
+      if (!named(grid_name)) {
         throw InputError("'" + vdb_path + "' has no grid named '" + grid_name +
                          "'; its grids are " + (names.empty() ? "none" : names));
       }
-      chosen = grid_name;
-    } else {
-      auto is_float_ls = [](const openvdb::GridBase& g) {
-        return g.isType<FloatGrid>() && g.getGridClass() == openvdb::GRID_LEVEL_SET;
-      };
-      for (const auto& m : *metas) {
-        if (m->getName() == "surface" && is_float_ls(*m)) chosen = "surface";
-      }
-      for (const auto& m : *metas) {
-        if (chosen.empty() && is_float_ls(*m)) chosen = m->getName();
-      }
-      if (chosen.empty()) {
-        throw InputError("'" + vdb_path + "' holds no float level set grid (its grids: " +
-                         (names.empty() ? "none" : names) +
-                         "); pass --grid NAME, and if that grid is a signed distance field, "
-                         "set its grid class to level set");
-      }
+      return grid_name;
     }
-    base = file.readGrid(chosen);
-    file.close();
-  } catch (const openvdb::Exception& e) {
-    throw InputError("cannot read '" + vdb_path + "' as a .vdb file: " + e.what());
-  }
+    auto is_float_ls = [](const openvdb::GridBase& g) {
+      return g.isType<FloatGrid>() && g.getGridClass() == openvdb::GRID_LEVEL_SET;
+    };
+    std::string name;
+    for (const auto& m : metas) {
+      if (m->getName() == "surface" && is_float_ls(*m)) name = "surface";
+    }
+    for (const auto& m : metas) {
+      if (name.empty() && is_float_ls(*m)) name = m->getName();
+    }
+    if (name.empty()) {
+      throw InputError("'" + vdb_path + "' holds no float level set grid (its grids: " +
+                       (names.empty() ? "none" : names) +
+                       "); pass --grid NAME, and if that grid is a signed distance field, "
+                       "set its grid class to level set");
+    }
+    return name;
+  };
+  const openvdb::GridPtrVecPtr grids = read_vdb_isolated(vdb_path, choose);
+  const openvdb::GridBase::Ptr base = grids->at(0);
+  const std::string chosen = base->getName();
   FloatGrid::Ptr grid = openvdb::gridPtrCast<FloatGrid>(base);
   where = "grid '" + chosen + "' of '" + vdb_path + "'";
   if (!grid) {
