@@ -5,7 +5,7 @@
 set -euo pipefail
 
 packages=(
-  build-essential cmake ninja-build ccache pkg-config clang-format
+  build-essential cmake ninja-build ccache pkg-config clang-format clang libclang-rt-14-dev
   libopenvdb-dev libboost-dev libtbb-dev
   libgtest-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev
   libopenvdb-tools gmsh tetgen

@@ -1,0 +1,30 @@
+// vdb_fuzz.cpp — libFuzzer target for the .vdb input path: the bytes are written to a file and
+// read as a level set (OpenVDB's reader, the grid checks, volumeToMesh) and the surface meshed
+// from it is validated, as `vdb_shell INPUT.vdb` does. Bad input must end in an InputError, or a
+// ResourceError when OpenVDB's reader (in its child process) runs out of memory on a size the
+// file claims.
+#include <unistd.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <fstream>
+#include <string>
+
+#include "core/base/errors.h"
+#include "core/read/load_surface.h"
+#include "vdb_ops/fields.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  static const std::string path =
+      "/tmp/vdb_shell_vdb_fuzz_" + std::to_string(static_cast<long>(getpid())) + ".vdb";
+  {
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    out.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
+  }
+  try {
+    vdb_shell::make_surface(vdb_shell::level_set_to_soup(path, "", 0.0), path);
+  } catch (const vdb_shell::InputError&) {
+  } catch (const vdb_shell::ResourceError&) {
+  }
+  return 0;
+}
