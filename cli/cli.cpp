@@ -38,6 +38,12 @@
 namespace vdb_shell {
 namespace {
 
+/// An allocation the system refused: the stages' estimates were within --max-memory, so the
+/// machine (or a ulimit) has less to give than the budget says.
+const char* const kOutOfMemory =
+    "out of memory: the system refused an allocation; set --max-memory to what this machine "
+    "can spare (every stage checks its estimate against it) or lower --resolution";
+
 /// What the user said on the command line (defaults are the documented ones).
 struct CliOptions {
   std::vector<std::string> inputs;
@@ -397,7 +403,7 @@ int run_batch(const CliOptions& opt, std::ostream& out, std::ostream& err) {
       error = e.what();
       is_bad_input = true;
     } catch (const std::bad_alloc&) {
-      error = "out of memory; lower --resolution or --max-memory";
+      error = kOutOfMemory;
     } catch (const std::exception& e) {
       error = e.what();
     }
@@ -579,7 +585,7 @@ int run_cli_impl(int argc, const char* const* argv, std::ostream& out, std::ostr
     err << "vdb_shell: error: " << e.what() << "\n";
     return kExitBadInput;
   } catch (const std::bad_alloc&) {
-    err << "vdb_shell: error: out of memory; lower --resolution or --max-memory\n";
+    err << "vdb_shell: error: " << kOutOfMemory << "\n";
     return kExitFailure;
   } catch (const std::exception& e) {
     err << "vdb_shell: error: " << e.what() << "\n";

@@ -70,6 +70,47 @@ TEST(Cli, BadInputIsOneLineAndExitCode2) {
   EXPECT_NE(r.err.find("open.obj"), std::string::npos) << r.err;
 }
 
+TEST(Cli, HostileFilesExit2WithOneLineAndWriteNothing) {
+  // Headers announcing more than the file holds, counts that are not counts, face lines that
+  // end early, indices out of range, and every input the fuzz targets found: each is exit 2 with
+  // one line on stderr and no output file (or, where what is left is a valid surface, exit 0).
+  TempDir dir;
+  const std::string tet_off = "OFF\n4 4 0\n0 0 0\n2 0 0\n0 2 0\n0 0 2\n";
+  std::vector<std::pair<std::string, std::string>> files = {
+      {"empty_header.off", "OFF\n"},
+      {"huge_counts.off", "OFF\n100000000 100000000 0\n"},
+      {"negative.off", "OFF\n-5 -3 0\n"},
+      {"overflow.off", "OFF\n99999999999999999999999 1 0\n"},
+      {"corners.off", tet_off + "2000000000 0 1 2\n"},
+      {"index.obj", std::string(kTetObj) + "f 1 2 99999999999\n"},
+      {"cut.stl", "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\n"},
+      {"huge.ply",
+       "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\n"
+       "property float x\nproperty float y\nproperty float z\nend_header\n"}};
+  for (const char* format : {"obj", "off", "ply", "stl", "vdb"}) {
+    const auto folder = std::filesystem::path(VDB_SHELL_FUZZ_REGRESSIONS) / format;
+    if (!std::filesystem::is_directory(folder)) continue;
+    for (const auto& entry : std::filesystem::directory_iterator(folder)) {
+      std::ifstream in(entry.path(), std::ios::binary);
+      files.emplace_back(entry.path().filename().string() + "." + format,
+                         std::string(std::istreambuf_iterator<char>(in), {}));
+    }
+  }
+  for (const auto& [name, text] : files) {
+    test::write_text(dir.file(name), text);
+    const std::string out = dir.file("out_" + name + ".vtu");
+    const auto r = run_command(test::vdb_shell_bin() + " '" + dir.file(name) + "' -o '" + out +
+                               "' --report '" + out + ".json' --resolution 16 -q");
+    if (r.exit_code == 0) continue;  // what is left of a damaged file may be a valid surface
+    EXPECT_EQ(r.exit_code, 2) << name << ": " << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << name << ": " << r.err;
+    EXPECT_NE(r.err.find(name), std::string::npos) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(out)) << name;
+    EXPECT_FALSE(std::filesystem::exists(out + ".json")) << name;
+  }
+  EXPECT_GE(files.size(), 12u);
+}
+
 TEST(Cli, ACrossingSurfaceIsRefusedInEveryMode) {
   // Two tetrahedra through each other: closed, manifold and outward, but crossing.
   TempDir dir;
