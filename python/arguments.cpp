@@ -205,6 +205,10 @@ const std::vector<OptionSpec>& option_specs() {
       {"grid", "--grid", "grid of level_set to use (default: 'surface', else the first level set)",
        [](ShellOptions& o, py::handle v, const char* n) { o.grid_name = to_text(v, n); },
        [](const ShellOptions&) { return std::string("None"); }},
+      {"adaptivity", "--adaptivity",
+       "build_shell_from_level_set(): 0 keeps voxel-sized quads, up to 1 merges flat regions",
+       [](ShellOptions& o, py::handle v, const char* n) { o.adaptivity = to_float(v, n); },
+       [](const ShellOptions& o) { return number_text(o.adaptivity); }},
   };
   return specs;
 }

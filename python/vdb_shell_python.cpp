@@ -284,21 +284,18 @@ struct PyShellResult {
 // ---------------------------------------------------------------------------------------------
 // The module's functions.
 
-PyShellResult build_shell_py(py::handle vertices, py::handle faces, const py::object& progress,
-                             const std::string& source, const py::kwargs& kwargs) {
+/// Runs `build` (ShellResult(const RunControl&)) on a worker thread with `progress`, the
+/// messages naming the Python keywords.
+template <class Build>
+PyShellResult run_build(const py::object& progress, const Build& build) {
   if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
     throw py::type_error("progress must be callable as progress(stage, fraction) or None; got " +
                          type_name(progress));
-  const ShellOptions options = parse_options(kwargs);
-  PolygonSoup soup;
-  soup.points = read_vertices(vertices);
-  soup.polygons = read_faces(faces);
   std::shared_ptr<const ShellResult> result;
   try {
     result = run_on_worker<std::shared_ptr<const ShellResult>>(
         [&](const RunControl& control) {
-          const LoadedSurface surface = make_surface(soup, source);
-          return std::make_shared<const ShellResult>(build_shell(surface, options, control));
+          return std::make_shared<const ShellResult>(build(control));
         },
         progress);
   } catch (const InputError& e) {
@@ -307,6 +304,26 @@ PyShellResult build_shell_py(py::handle vertices, py::handle faces, const py::ob
     throw ResourceError(with_keyword_names(e.what()));
   }
   return PyShellResult(std::move(result));
+}
+
+PyShellResult build_shell_py(py::handle vertices, py::handle faces, const py::object& progress,
+                             const std::string& source, const py::kwargs& kwargs) {
+  const ShellOptions options = parse_options(kwargs);
+  PolygonSoup soup;
+  soup.points = read_vertices(vertices);
+  soup.polygons = read_faces(faces);
+  return run_build(progress, [&](const RunControl& control) {
+    return build_shell(make_surface(soup, source), options, control);
+  });
+}
+
+PyShellResult build_shell_from_level_set_py(py::handle path_like, const py::object& progress,
+                                            const py::kwargs& kwargs) {
+  const std::string path = to_path(path_like, "path");
+  const ShellOptions options = parse_options(kwargs);
+  return run_build(progress, [&](const RunControl& control) {
+    return build_shell_from_level_set(path, options, control);
+  });
 }
 
 py::tuple load_surface_py(py::handle path_like) {
@@ -422,6 +439,14 @@ PYBIND11_MODULE(vdb_shell, m) {
   static const std::string build_doc = build_shell_doc();
   m.def("build_shell", &build_shell_py, build_doc.c_str(), py::arg("vertices"), py::arg("faces"),
         py::kw_only(), py::arg("progress") = py::none(), py::arg("source") = "arrays");
+  m.def("build_shell_from_level_set", &build_shell_from_level_set_py,
+        "build_shell_from_level_set(path, *, progress=None, **options) -> ShellResult\n\n"
+        "Meshes the level set of a .vdb file at its zero crossing (options grid and adaptivity) "
+        "and shells that surface in the same field, as `vdb_shell FILE.vdb -o ...` does. The "
+        "options and the result are build_shell()'s (level_set must not be given: the file is "
+        "its own). Raises InputError for a missing or corrupt file, a grid that is not a float "
+        "level set, negative outside, or holds no closed surface.",
+        py::arg("path"), py::kw_only(), py::arg("progress") = py::none());
   m.def("load_surface", &load_surface_py,
         "load_surface(path) -> (vertices, faces)\n\n"
         "Reads and validates a surface file (.obj .off .ply .stl): vertices (n, 3) float64 and "

@@ -9,6 +9,7 @@
 # Environment (set by CTest, python/CMakeLists.txt): PYTHONPATH names the module's folder;
 # VDB_SHELL_SHAPES_BIN, the vdb_shell_shapes executable; VDB_SHELL_SHARED_MESHES, the folder of
 # the shared mesh corpus (tests using either skip without it).
+import json
 import os
 import re
 import select
@@ -622,3 +623,30 @@ def test_module_metadata():
     for name in ("ResourceError", "InternalError", "CancelledError"):
         assert issubclass(getattr(vdb_shell, name), RuntimeError)
         assert issubclass(getattr(vdb_shell, name), vdb_shell.Error)
+
+
+def test_build_shell_from_level_set_matches_the_command(tmp_path):
+    """The same .vdb shelled through the module and through `vdb_shell FILE.vdb`: the same
+    surface and the same shell; a corrupt file is an InputError."""
+    shapes, cli = os.environ.get("VDB_SHELL_SHAPES_BIN"), os.environ.get("VDB_SHELL_BIN")
+    if not shapes or not cli or not os.access(cli, os.X_OK):
+        pytest.skip("VDB_SHELL_SHAPES_BIN / VDB_SHELL_BIN do not name the executables")
+    box, vdb, report = tmp_path / "box.obj", tmp_path / "box.vdb", tmp_path / "r.json"
+    subprocess.run([shapes, "box", "-o", str(box)], check=True, capture_output=True)
+    subprocess.run([cli, str(box), "-o", str(tmp_path / "box.vtu"), "--resolution", "24",
+                    "--grids", str(vdb), "-q"], check=True, capture_output=True)
+    subprocess.run([cli, str(vdb), "-o", str(tmp_path / "ls.vtu"), "--adaptivity", "0.5",
+                    "--report", str(report), "-q"], check=True, capture_output=True)
+    expected = json.loads(report.read_text())
+    result = vdb_shell.build_shell_from_level_set(vdb, adaptivity=0.5)
+    assert len(result.tets) == expected["shell"]["tets"]
+    assert result.report["input"]["faces"] == expected["input"]["faces"]
+    assert result.report["shell"]["coverage"] == expected["shell"]["coverage"]
+    n = result.report["input"]["vertices"]
+    assert np.all(tet_volumes(result.points, result.tets) > 0)
+    assert np.unique(result.source_triangle).size == expected["input"]["faces"]
+    assert not result.inner[:n].any() and result.inner[n:].all()
+    corrupt = tmp_path / "corrupt.vdb"
+    corrupt.write_bytes(vdb.read_bytes()[: vdb.stat().st_size // 2])
+    with pytest.raises(vdb_shell.InputError, match="corrupt.vdb"):
+        vdb_shell.build_shell_from_level_set(corrupt)
