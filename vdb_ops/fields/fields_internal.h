@@ -154,8 +154,10 @@ using GridSelector = std::function<std::string(const openvdb::GridPtrVec& metas)
 /// target found io::bloscFromStream copying a stored length into a node's buffer), so this
 /// process never parses the file's bytes itself, only what the writer made of the child's
 /// grids. A reader that crashes or throws takes only the child down.
+/// The child may map 64 times the file's size (at least 1 GiB) beyond what it inherits: a
+/// reader asking for more is reading sizes a corrupt file claims.
 /// \throw InputError naming the file (what the reader or `select` said, or how it failed);
-///        ResourceError if the child cannot be started or ran out of memory.
+///        ResourceError if the child cannot be started.
 openvdb::GridPtrVecPtr read_vdb_isolated(const std::string& path, const GridSelector& select);
 
 /// Reads the float level set `grid_name` of `vdb_path` (empty name: 'surface', else the first
