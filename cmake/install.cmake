@@ -26,7 +26,7 @@ foreach(header
   get_filename_component(folder ${header} DIRECTORY)
   install(FILES core/${header} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/vdb_shell/core/${folder})
 endforeach()
-install(FILES vdb_ops/fields.h DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/vdb_shell/vdb_ops)
+install(FILES vdb_ops/fields.h vdb_ops/repair.h DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/vdb_shell/vdb_ops)
 
 install(EXPORT vdb_shell_targets NAMESPACE vdb_shell:: FILE vdb_shell-targets.cmake
   DESTINATION ${VDB_SHELL_INSTALL_CMAKEDIR})

@@ -333,6 +333,41 @@ void check_options(const ShellOptions& o) {
   require(o.adaptivity >= 0 && o.adaptivity <= 1, "--adaptivity", o.adaptivity,
           "must be in [0, 1]");
   require(o.threads >= 0, "--threads", o.threads, "must be >= 0 (0: all cores)");
+  require(std::isfinite(o.repair_voxel_size) && o.repair_voxel_size >= 0, "--repair-voxel-size",
+          o.repair_voxel_size, "must be a length >= 0 (0: the fields' voxel size)");
+  require(std::isfinite(o.repair_closing) && o.repair_closing >= 1, "--repair-closing",
+          o.repair_closing, "must be at least 1 voxel");
+}
+
+LoadedSurface load_repaired_surface(const PolygonSoup& soup, const std::string& source,
+                                    const ShellOptions& options, RepairReport& report) {
+  check_options(options);
+  RepairOptions repair;
+  repair.closing = options.repair_closing;
+  repair.adaptivity = options.adaptivity;
+  repair.max_memory_gb = options.fields.max_memory_gb;
+  repair.voxel_size =
+      options.repair_voxel_size > 0 ? options.repair_voxel_size : options.fields.voxel_size;
+  if (repair.voxel_size <= 0) {  // the fields' voxel size: the longest side / --resolution
+    BBox box;
+    for (const Vec3d& p : soup.points)
+      if (is_finite(p)) box.expand(p);
+    repair.voxel_size = box.empty() ? 0.0 : box.max_side() / options.fields.resolution;
+  }
+  if (!(repair.voxel_size > 0))
+    throw InputError(source + ": nothing to repair: its points span no length");
+  const PolygonSoup rebuilt = repair_surface(soup, repair, source, report);
+  try {
+    LoadedSurface surface = make_surface(rebuilt, source + " (repaired)");
+    surface.notices.insert(
+        surface.notices.begin(),
+        "the input was rebuilt watertight (--repair): " + std::to_string(report.input_faces) +
+            " polygons -> " + std::to_string(surface.mesh.triangles.size()) + " triangles");
+    return surface;
+  } catch (const InputError& e) {
+    throw InternalError(std::string("the repaired surface is not valid (please report): ") +
+                        e.what());
+  }
 }
 
 ShellResult build_shell(const LoadedSurface& surface, const ShellOptions& options,
@@ -437,6 +472,21 @@ std::string report_json(const ShellResult& r, const ReportFiles& files, double r
                     {"min_dihedral_deg", q.min_dihedral_deg},
                     {"non_positive", q.non_positive},
                     {"histogram", q.histogram}};
+  }
+  if (r.repair) {
+    const RepairReport& p = *r.repair;
+    j["repair"] = {{"method", "closing"},
+                   {"voxel_size", p.voxel_size},
+                   {"closing", p.closing},
+                   {"input_faces", p.input_faces},
+                   {"faces", p.faces},
+                   {"components", r.input.stats.components},
+                   {"holes_closed", p.holes_closed},
+                   {"distance_max", p.distance_max},
+                   {"distance_mean", p.distance_mean},
+                   {"input_distance_max", p.input_distance_max},
+                   {"input_distance_mean", p.input_distance_mean},
+                   {"seconds", p.seconds}};
   }
   const MemoryEstimates& m = r.memory;
   const auto gib = [](std::size_t bytes) { return double(bytes) / kBytesPerGiB; };

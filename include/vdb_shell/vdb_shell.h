@@ -25,6 +25,7 @@
 
 #include <cstddef>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -39,6 +40,7 @@
 #include "core/validity/search.h"
 #include "core/validity/shell_checks.h"
 #include "vdb_ops/fields.h"
+#include "vdb_ops/repair.h"
 
 namespace vdb_shell {
 
@@ -57,6 +59,12 @@ struct ShellOptions {
   /// build_shell_from_level_set(): 0 keeps voxel-sized quads, up to 1 merges flat regions into
   /// fewer faces (--adaptivity).
   double adaptivity = 0.0;
+  /// Rebuild the input watertight through a volume before shelling it (--repair,
+  /// load_repaired_surface(), vdb_ops/repair.h): its voxel size (--repair-voxel-size; 0: the
+  /// fields' voxel size) and the closing, in voxels (--repair-closing).
+  bool repair = false;
+  double repair_voxel_size = 0.0;
+  double repair_closing = 2.0;
   /// Stop after the traces: the result has the fields' figures and the traces, no shell (what
   /// `--grids` without `-o` needs).
   bool traces_only = false;
@@ -151,6 +159,8 @@ struct ShellResult {
   QualitySummary quality;  ///< histogram, min/median/mean Q, coverage, volume
   StageTimings timings;
   MemoryEstimates memory;  ///< every stage's estimated peak, checked against --max-memory
+  /// What --repair did (set by the caller that repaired the input: load_repaired_surface()).
+  std::optional<RepairReport> repair;
   /// Every notice of the run, one sentence each: validation's (flipped, triangulated, dropped
   /// vertices) first, then the fields' (interior filled by fast sweeping, ...).
   std::vector<std::string> notices;
@@ -171,6 +181,15 @@ ShellResult build_shell(const SurfaceMesh& mesh, const ShellOptions& options,
 /// The zero crossing of a .vdb level set (options.grid_name, options.adaptivity) as a validated
 /// surface: the surface a level set input is shelled on.
 LoadedSurface load_level_set_surface(const std::string& vdb_path, const ShellOptions& options);
+
+/// `soup` (any polygons: holes, seams, overlaps, self-intersections) rebuilt as a closed,
+/// 2-manifold surface through a volume (repair_surface(), options.repair_voxel_size or the
+/// fields' voxel size, options.repair_closing) and validated; `report` says what the repair did.
+/// The shell's outer boundary is this surface, not the input's polygons.
+/// \throw InputError for bad options or an input with nothing to repair (repair.h);
+///        InternalError if the rebuilt surface fails validation (a bug: please report).
+LoadedSurface load_repaired_surface(const PolygonSoup& soup, const std::string& source,
+                                    const ShellOptions& options, RepairReport& report);
 
 /// Meshes the level set of `vdb_path` (load_level_set_surface()) and shells it, using the same
 /// level set as the distance field (options.level_set must be empty).

@@ -1,0 +1,50 @@
+// repair.h — --repair: a closed, 2-manifold surface rebuilt through a volume from whatever
+// polygons a file holds (holes, seams stored twice, non-manifold edges, overlapping parts,
+// self-intersections, flipped patches, open sheets).
+//
+// The input's triangles are voxelized as an unsigned distance (OpenVDB meshToVolume); the voxels
+// within `closing` voxels of them are a dilated band that closes every hole and gap narrower than
+// about twice that; the outside is what a flood fill from the domain's boundary reaches around
+// the band; everything else is the dilated solid (overlapping parts become their union, a closed
+// cavity stays a cavity, an open sheet a slab). The solid is eroded back by the same distance
+// (the iso-surface `closing` voxels inside the band of a signed distance: the outside's own
+// distance to the band, the inside's Euclidean distance to the outside) and meshed with
+// volumeToMesh. So the repaired surface follows the input within about a voxel where the input is
+// a closed surface, and spans a hole with a smooth cap.
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+#include "core/read/polygon_soup.h"
+
+namespace vdb_shell {
+
+struct RepairOptions {
+  double voxel_size = 0.0;     ///< world units, > 0
+  double closing = 2.0;        ///< voxels: holes and gaps up to about twice this across are closed
+  double adaptivity = 0.0;     ///< volumeToMesh's, [0, 1]
+  double max_memory_gb = 8.0;  ///< the volume's estimate is checked against it
+};
+
+/// What a repair did (the report's `repair` section). Distances in input units.
+struct RepairReport {
+  double voxel_size = 0.0;
+  double closing = 0.0;          ///< voxels
+  std::size_t input_faces = 0;   ///< polygons of the input
+  std::size_t faces = 0;         ///< triangles and quads of the repaired surface
+  std::size_t holes_closed = 0;  ///< boundary loops of the input
+  double distance_max = 0.0;     ///< repaired surface -> nearest input triangle
+  double distance_mean = 0.0;
+  double input_distance_max = 0.0;  ///< input vertices not swallowed -> repaired surface
+  double input_distance_mean = 0.0;
+  double seconds = 0.0;
+};
+
+/// The repaired surface of `input` (polygons facing outward), `name` naming it in messages.
+/// \throw InputError if the input has no usable triangle, the closing swallows the model, or
+///        nothing solid is left; ResourceError if the volume exceeds options.max_memory_gb.
+PolygonSoup repair_surface(const PolygonSoup& input, const RepairOptions& options,
+                           const std::string& name, RepairReport& report);
+
+}  // namespace vdb_shell
