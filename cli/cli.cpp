@@ -68,7 +68,10 @@ struct CliOptions {
   bool msh_version_given = false;
   bool grid_given = false;
   bool adaptivity_given = false;
-  ShellOptions shell;  ///< every option of the pipeline (--level-set, --grid, -j among them)
+  bool repair_closing_given = false;
+  bool repair_voxel_size_given = false;
+  std::string repaired;  ///< --repaired: where to write the repaired surface
+  ShellOptions shell;    ///< every option of the pipeline (--level-set, --grid, -j among them)
 
   bool batch() const { return inputs.size() > 1; }
   /// A bar redrawn in place on a terminal, one line per stage with --progress elsewhere.
@@ -122,8 +125,19 @@ void check_contradictions(const CliOptions& o) {
                      "INPUT: give --level-set FILE.vdb too, or drop --grid");
   if (!o.shell.level_set.empty() && std::any_of(o.inputs.begin(), o.inputs.end(), is_vdb))
     throw InputError("a .vdb INPUT is its own level set: drop --level-set");
-  if (o.adaptivity_given && !std::any_of(o.inputs.begin(), o.inputs.end(), is_vdb))
-    throw InputError("--adaptivity applies to meshing a .vdb INPUT: drop it for mesh files");
+  if (o.adaptivity_given && !o.shell.repair &&
+      !std::any_of(o.inputs.begin(), o.inputs.end(), is_vdb))
+    throw InputError(
+        "--adaptivity applies to meshing a .vdb INPUT or a --repair: drop it for mesh files");
+  if (!o.shell.repair &&
+      (o.repair_closing_given || o.repair_voxel_size_given || !o.repaired.empty()))
+    throw InputError(
+        "--repair-closing, --repair-voxel-size and --repaired describe a repair: "
+        "add --repair");
+  if (o.shell.repair && std::any_of(o.inputs.begin(), o.inputs.end(), is_vdb))
+    throw InputError(
+        "--repair rebuilds a mesh file: a .vdb INPUT is already a level set; drop "
+        "--repair");
   if (o.batch()) {
     if (o.msh_version_given && o.format != "msh")
       throw InputError(
@@ -178,6 +192,11 @@ void check_outputs(const CliOptions& o) {
       throw InputError("--inner " + o.inner + ": use .obj, .ply or .off");
     folder_exists(o.inner, "--inner");
   }
+  if (!o.repaired.empty()) {
+    if (!ext_is(o.repaired, ".obj") && !ext_is(o.repaired, ".ply") && !ext_is(o.repaired, ".off"))
+      throw InputError("--repaired " + o.repaired + ": use .obj, .ply or .off");
+    folder_exists(o.repaired, "--repaired");
+  }
   if (!o.report.empty()) folder_exists(o.report, "--report");
   if (o.output.empty() && (!o.paths.empty() || !o.inner.empty() || !o.report.empty()))
     throw InputError("--paths, --inner and --report describe a shell: give -o OUTPUT too");
@@ -191,9 +210,10 @@ void check_batch(const CliOptions& o) {
     throw InputError(
         "several inputs: give -o DIR, the folder that receives one shell per input "
         "(or run vdb_shell once per input to see each summary)");
-  if (!o.grids.empty() || !o.paths.empty() || !o.inner.empty() || !o.shell.level_set.empty())
+  if (!o.grids.empty() || !o.paths.empty() || !o.inner.empty() || !o.repaired.empty() ||
+      !o.shell.level_set.empty())
     throw InputError(
-        "--grids, --paths, --inner and --level-set take a single input: run "
+        "--grids, --paths, --inner, --repaired and --level-set take a single input: run "
         "vdb_shell once per input for them");
   tet_format_from_path("x." + o.format, o.msh_version);
   auto check_dir = [](const std::string& dir, const char* option, const char* example) {
@@ -290,13 +310,25 @@ RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& 
   progress.start("read");
   // A .vdb input is a level set: its zero crossing is the surface, and it is also the field.
   const bool vdb_input = is_vdb(opt.input);
-  const LoadedSurface surface =
-      vdb_input ? load_level_set_surface(opt.input, shell) : load_surface(opt.input);
+  RepairReport repair;
+  const LoadedSurface surface = [&] {
+    if (vdb_input) return load_level_set_surface(opt.input, shell);
+    if (shell.repair)
+      return load_repaired_surface(read_polygon_soup(opt.input), opt.input, shell, repair);
+    try {
+      return load_surface(opt.input);
+    } catch (const InputError& e) {  // a mesh that is not closed or crosses itself
+      const std::string what = e.what();
+      if (what.find("not a closed 2-manifold triangle surface") == std::string::npos) throw;
+      throw InputError(what + " — or rerun with --repair to rebuild it watertight");
+    }
+  }();
   if (vdb_input) shell.level_set = opt.input;
   const double t_read = progress.stop();
   if (!opt.quiet)
     for (const std::string& n : surface.notices) err << "vdb_shell: note: " << n << "\n";
   if (!shell_wanted && opt.grids.empty()) {
+    if (!opt.repaired.empty()) write_surface(opt.repaired, surface.mesh);
     print_summary(out, opt.input, surface);
     return outcome;
   }
@@ -307,7 +339,7 @@ RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& 
   };
   Watchdog watchdog(opt.timeout);
   control.cancel = watchdog.flag();
-  const ShellResult r = [&] {
+  ShellResult r = [&] {
     try {
       return build_shell(surface, shell, control);
     } catch (const CancelledError& e) {
@@ -318,6 +350,7 @@ RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& 
                           stage + "); raise --timeout or lower --resolution; nothing was written");
     }
   }();
+  if (shell.repair) r.repair = repair;
   if (!opt.quiet)
     for (std::size_t i = surface.notices.size(); i < r.notices.size(); ++i)
       err << "vdb_shell: note: " << r.notices[i] << "\n";
@@ -328,7 +361,10 @@ RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& 
 
   if (!shell_wanted) {  // --grids only: the fields and the traces as points
     progress.start("write");
+    CommitGroup outputs;
     write_fields(opt.grids, r);
+    if (!opt.repaired.empty()) write_surface(opt.repaired, surface.mesh);
+    outputs.commit();
     progress.stop();
     if (!opt.quiet) err << "vdb_shell: wrote " << opt.grids << "\n";
     if (opt.verbose) err << "vdb_shell: timings: " << progress.timings() << "\n";
@@ -342,6 +378,7 @@ RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& 
   if (!opt.grids.empty()) write_fields(opt.grids, r);
   if (!opt.paths.empty()) write_traces(opt.paths, r);
   if (!opt.inner.empty()) write_inner_surface(opt.inner, r);
+  if (!opt.repaired.empty()) write_surface(opt.repaired, surface.mesh);
   const double t_write = progress.stop();
   const double t_all = seconds_since(t_total);
 
@@ -446,6 +483,22 @@ void register_options(CLI::App& app, CliOptions& opt) {
                  "Meshing a .vdb INPUT: 0 keeps voxel-sized quads, up to 1 merges flat regions "
                  "into fewer faces")
       ->check(CLI::Range(0.0, 1.0))
+      ->group(in);
+  app.add_flag("--repair", opt.shell.repair,
+               "Rebuild the input watertight through a volume first (holes, seams, overlaps, "
+               "self-intersections); the shell's outer boundary is then the repaired surface")
+      ->group(in);
+  app.add_option("--repair-closing", opt.shell.repair_closing,
+                 "--repair: close holes and gaps up to about twice this many voxels across")
+      ->check(CLI::Range(1.0, 1e6))
+      ->group(in);
+  app.add_option("--repair-voxel-size", opt.shell.repair_voxel_size,
+                 "--repair: the repair volume's voxel size, input units (0: the fields' voxel "
+                 "size)")
+      ->check(CLI::NonNegativeNumber)
+      ->group(in);
+  app.add_option("--repaired", opt.repaired,
+                 "--repair: write the repaired surface (.obj .ply .off)")
       ->group(in);
 
   const char* fg = "Fields";
@@ -574,6 +627,8 @@ int run_cli_impl(int argc, const char* const* argv, std::ostream& out, std::ostr
     opt.msh_version_given = app.count("--msh-version") > 0;
     opt.grid_given = app.count("--grid") > 0;
     opt.adaptivity_given = app.count("--adaptivity") > 0;
+    opt.repair_closing_given = app.count("--repair-closing") > 0;
+    opt.repair_voxel_size_given = app.count("--repair-voxel-size") > 0;
   } catch (const CLI::ParseError& e) {
     const int code = app.exit(e, out, err);
     return code == 0 ? kExitOk : kExitBadInput;

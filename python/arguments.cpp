@@ -121,6 +121,13 @@ double to_float(py::handle value, const char* name) {
   return v;
 }
 
+bool to_bool(py::handle value, const char* name) {
+  if (!PyBool_Check(value.ptr()))
+    throw InputError(std::string("option ") + name + " must be True or False; got " +
+                     type_name(value));
+  return value.ptr() == Py_True;
+}
+
 std::string to_text(py::handle value, const char* name) {
   if (!PyUnicode_Check(value.ptr()))
     throw InputError(std::string("option ") + name + " must be a str; got " + type_name(value));
@@ -209,6 +216,17 @@ const std::vector<OptionSpec>& option_specs() {
        "build_shell_from_level_set(): 0 keeps voxel-sized quads, up to 1 merges flat regions",
        [](ShellOptions& o, py::handle v, const char* n) { o.adaptivity = to_float(v, n); },
        [](const ShellOptions& o) { return number_text(o.adaptivity); }},
+      {"repair", "--repair",
+       "rebuild the surface watertight through a volume first (report['repair'] says how)",
+       [](ShellOptions& o, py::handle v, const char* n) { o.repair = to_bool(v, n); },
+       [](const ShellOptions& o) { return std::string(o.repair ? "True" : "False"); }},
+      {"repair_closing", "--repair-closing", "repair: close holes up to about twice this (voxels)",
+       [](ShellOptions& o, py::handle v, const char* n) { o.repair_closing = to_float(v, n); },
+       [](const ShellOptions& o) { return number_text(o.repair_closing); }},
+      {"repair_voxel_size", "--repair-voxel-size",
+       "repair: the repair volume's voxel size (0: the fields')",
+       [](ShellOptions& o, py::handle v, const char* n) { o.repair_voxel_size = to_float(v, n); },
+       [](const ShellOptions& o) { return number_text(o.repair_voxel_size); }},
   };
   return specs;
 }

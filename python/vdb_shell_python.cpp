@@ -313,7 +313,12 @@ PyShellResult build_shell_py(py::handle vertices, py::handle faces, const py::ob
   soup.points = read_vertices(vertices);
   soup.polygons = read_faces(faces);
   return run_build(progress, [&](const RunControl& control) {
-    return build_shell(make_surface(soup, source), options, control);
+    if (!options.repair) return build_shell(make_surface(soup, source), options, control);
+    RepairReport repair;
+    ShellResult result =
+        build_shell(load_repaired_surface(soup, source, options, repair), options, control);
+    result.repair = repair;
+    return result;
   });
 }
 

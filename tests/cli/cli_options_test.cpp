@@ -392,6 +392,10 @@ const std::map<std::string, std::string>& shown_elsewhere() {
       {"--inner", "Pipeline.ThicknessLimitHolds"},
       {"--max-thickness", "Pipeline.ThicknessLimitHolds"},
       {"--thickness-edge-factor", "Pipeline.EdgeFactorThicknessLimitHolds"},
+      {"--repair", "CliRepair.AHoleIsRefusedWithTheHintAndRepairedWithIt"},
+      {"--repair-closing", "CliRepair.AHoleIsRefusedWithTheHintAndRepairedWithIt"},
+      {"--repair-voxel-size", "CliRepair.AHoleIsRefusedWithTheHintAndRepairedWithIt"},
+      {"--repaired", "CliRepair.AHoleIsRefusedWithTheHintAndRepairedWithIt"},
   };
   return m;
 }

@@ -20,6 +20,7 @@
 #include "assets/shapes.h"
 #include "cli/cli.h"
 #include "core/base/memory_budget.h"
+#include "core/read/load_surface.h"
 #include "core/write/atomic_file.h"
 #include "core/write/shell_writers.h"
 #include "tests/test_support.h"
@@ -174,6 +175,55 @@ std::vector<std::string> files_below(const std::filesystem::path& dir) {
     if (e.is_regular_file()) names.push_back(e.path().filename().string());
   std::sort(names.begin(), names.end());
   return names;
+}
+
+TEST(CliRepair, AHoleIsRefusedWithTheHintAndRepairedWithIt) {
+  // A sphere with one face missing: without --repair exit 2 suggesting it; with it a shell of
+  // the repaired surface (checked here against that surface, read back from --repaired), the
+  // report's repair section, and every output written.
+  TempDir dir;
+  SurfaceMesh holed = make_shape("sphere");
+  holed.triangles.erase(holed.triangles.begin() + 300);
+  const std::string in = dir.file("holed.obj");
+  write_surface(in, holed);
+  const InProcess refused = cli({in, "-o", dir.file("refused.ele")});
+  EXPECT_EQ(refused.code, 2);
+  EXPECT_NE(refused.err.find("boundary edges"), std::string::npos) << refused.err;
+  EXPECT_NE(refused.err.find("rerun with --repair"), std::string::npos) << refused.err;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("refused.ele")));
+
+  const InProcess r =
+      cli({in, "--repair", "--repair-closing", "3", "-r", "48", "-o", dir.file("shell.ele"),
+           "--repaired", dir.file("repaired.obj"), "--report", dir.file("r.json"), "-q"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const LoadedSurface repaired = load_surface(dir.file("repaired.obj"));
+  EXPECT_EQ(repaired.stats.components, 1u);
+  EXPECT_EQ(repaired.stats.genus, 0);
+  const TetMesh shell = test::read_tetgen_shell(dir.file("shell.ele"));
+  const auto report = nlohmann::json::parse(test::read_text(dir.file("r.json")));
+  EXPECT_EQ(test::independent_shell_problems(repaired.mesh, shell,
+                                             2 * report["validity"]["sectors"].get<std::size_t>()),
+            "");
+  const auto& repair = report["repair"];
+  EXPECT_EQ(repair["holes_closed"], 1);
+  EXPECT_EQ(repair["input_faces"], holed.triangles.size());
+  EXPECT_EQ(repair["closing"], 3.0);
+  EXPECT_GT(repair["distance_max"].get<double>(), 0.0);
+  EXPECT_LT(repair["distance_max"].get<double>(), 4.0 * repair["voxel_size"].get<double>());
+  EXPECT_LT(repair["input_distance_max"].get<double>(), repair["voxel_size"].get<double>());
+  EXPECT_EQ(report["input"]["faces"], repaired.stats.faces);
+
+  // --repair-voxel-size sets the repair volume's voxels (the report says so).
+  const InProcess sized = cli({in, "--repair", "--repair-voxel-size", "0.04", "-o",
+                               dir.file("sized.ele"), "--report", dir.file("s.json"), "-q"});
+  ASSERT_EQ(sized.code, 0) << sized.err;
+  EXPECT_EQ(nlohmann::json::parse(test::read_text(dir.file("s.json")))["repair"]["voxel_size"],
+            0.04);
+
+  // Repair options without --repair, and --repair of a level set: contradictions, exit 2.
+  EXPECT_EQ(cli({in, "--repair-closing", "3"}).code, 2);
+  EXPECT_EQ(cli({in, "--repaired", dir.file("x.obj")}).code, 2);
+  EXPECT_EQ(cli({dir.file("x.vdb"), "--repair"}).code, 2);
 }
 
 TEST(CliBatch, OneGoodOneBadInputExit2AndOneLineEach) {

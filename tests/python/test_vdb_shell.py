@@ -650,3 +650,21 @@ def test_build_shell_from_level_set_matches_the_command(tmp_path):
     corrupt.write_bytes(vdb.read_bytes()[: vdb.stat().st_size // 2])
     with pytest.raises(vdb_shell.InputError, match="corrupt.vdb"):
         vdb_shell.build_shell_from_level_set(corrupt)
+
+
+def test_repair_rebuilds_a_holed_sphere(sphere):
+    """repair=True shells a sphere with a face missing; the report's repair section counts the
+    hole, and the shell's first points are the repaired surface, a closed one (every edge of the
+    tets' boundary faces on it used twice)."""
+    v, f = sphere
+    holed = np.delete(f, 10, axis=0)
+    with pytest.raises(vdb_shell.InputError, match="boundary edges"):
+        vdb_shell.build_shell(v, holed, resolution=32)
+    result = vdb_shell.build_shell(v, holed, resolution=32, repair=True, repair_closing=3)
+    repair = result.report["repair"]
+    assert repair["holes_closed"] == 1 and repair["input_faces"] == len(holed)
+    assert repair["distance_max"] < 4 * repair["voxel_size"]
+    assert np.all(tet_volumes(result.points, result.tets) > 0)
+    assert result.report["input"]["faces"] == np.unique(result.source_triangle).size
+    with pytest.raises(vdb_shell.InputError, match="repair"):
+        vdb_shell.build_shell(v, holed, repair="yes")
