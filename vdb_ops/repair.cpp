@@ -19,6 +19,7 @@
 #include "core/base/geometry.h"
 #include "core/base/memory_budget.h"
 #include "core/base/timer.h"
+#include "core/read/load_surface.h"
 #include "vdb_ops/fields/fields_internal.h"
 
 namespace vdb_shell {
@@ -292,11 +293,11 @@ PolygonSoup repair_surface(const PolygonSoup& input, const RepairOptions& option
   std::vector<std::size_t>().swap(queue);
 
   // Erode by `r`: the closed solid, phi_r = r - (distance to the outside) <= 0, where that
-  // distance is the outside's own distance to the band (negative) or the inside's Euclidean
-  // distance to the outside's voxel centres, less the half voxel to their boundary. An open
-  // sheet's dilated slab (half as thick as r) erodes away: what erodes by r / 2 but lies more
-  // than r / 2 + 1 voxel from the closed solid is kept too, as a slab r thick.
-  const float rv = static_cast<float>(options.closing), ev = 0.5f * rv;  // voxels
+  // distance is the outside's own distance to the band (negative) or the inside's distance to
+  // the nearest outside voxel less that voxel's own distance to the band. An open sheet's
+  // dilated slab (2r thick) would erode away: what erodes by r / 3 but lies more than 2r + 1
+  // voxels from the core (deeper than r + 1/2) is kept too, as a slab about 4r / 3 thick.
+  const float rv = static_cast<float>(options.closing), ev = rv / 3.0f;  // voxels
   std::vector<float> to_outside(dense.size());
   std::vector<std::uint32_t> nearest;
   for (std::size_t v = 0; v < to_outside.size(); ++v)
@@ -317,28 +318,19 @@ PolygonSoup repair_surface(const PolygonSoup& input, const RepairOptions& option
     to_outside[v] = state[v] == 2 ? -beyond(v) : std::sqrt(to_outside[v]) - beyond(nearest[v]);
   std::vector<float> to_core(dense.size());
   for (std::size_t v = 0; v < to_core.size(); ++v)
-    to_core[v] = to_outside[v] >= rv ? 0.0f : static_cast<float>(kFar);
+    to_core[v] = to_outside[v] >= rv + 0.5f ? 0.0f : static_cast<float>(kFar);
   squared_distance_transform(dense, to_core, nearest);
   std::vector<std::uint32_t>().swap(nearest);
-  const float background = 3.0f * hf;
-  FloatGrid::Ptr sdf = FloatGrid::create(background);
-  sdf->setTransform(xform->copy());
-  sdf->setGridClass(openvdb::GRID_LEVEL_SET);
-  openvdb::FloatGrid::Accessor out = sdf->getAccessor();
+  // The signed distance, world units, the surface at 0: the closed solid and the thin parts,
+  // smoothed once (1-2-1 along each axis) so that where the two meet no crease folds the mesh.
+  std::vector<float> phi(dense.size());
   std::size_t inside = 0;
-  for (int k = 0; k < dense.n[2]; ++k)
-    for (int j = 0; j < dense.n[1]; ++j)
-      for (int i = 0; i < dense.n[0]; ++i) {
-        const std::size_t v = dense.index(i, j, k);
-        const float closed = rv - to_outside[v];
-        const float thin = std::max(ev - to_outside[v], 2.0f * rv + 1.0f - std::sqrt(to_core[v]));
-        const float value = std::min(closed, thin) * hf;  // world units, the surface at 0
-        inside += value < 0.0f;
-        if (std::abs(value) < background)
-          out.setValue(openvdb::Coord(i, j, k), value);
-        else if (value < 0.0f)
-          out.setValueOff(openvdb::Coord(i, j, k), -background);
-      }
+  for (std::size_t v = 0; v < dense.size(); ++v) {
+    const float closed = rv - to_outside[v];
+    const float thin = std::max(ev - to_outside[v], 2.0f * rv + 1.0f - std::sqrt(to_core[v]));
+    phi[v] = std::min(closed, thin) * hf;
+    inside += phi[v] < 0.0f;
+  }
   std::vector<float>().swap(to_core);
   std::vector<float>().swap(to_outside);
   std::vector<std::uint8_t>().swap(state);
@@ -346,19 +338,60 @@ PolygonSoup repair_surface(const PolygonSoup& input, const RepairOptions& option
     throw InputError(name + ": nothing solid is left after closing by " +
                      format_double(options.closing) +
                      " voxels (the input is degenerate: all its points on a line or a point)");
+  for (int axis = 0; axis < 3; ++axis) {
+    const std::size_t stride = axis == 0   ? 1
+                               : axis == 1 ? std::size_t(dense.n[0])
+                                           : std::size_t(dense.n[0]) * dense.n[1];
+    std::vector<float> line(dense.n[axis]);
+    int c[3];
+    const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
+    for (c[a2] = 0; c[a2] < dense.n[a2]; ++c[a2])
+      for (c[a1] = 0; c[a1] < dense.n[a1]; ++c[a1]) {
+        c[axis] = 0;
+        const std::size_t first = dense.index(c[0], c[1], c[2]);
+        for (int q = 0; q < dense.n[axis]; ++q) line[q] = phi[first + q * stride];
+        for (int q = 1; q + 1 < dense.n[axis]; ++q)
+          phi[first + q * stride] = 0.25f * (line[q - 1] + 2.0f * line[q] + line[q + 1]);
+      }
+  }
+  const float background = 3.0f * hf;
+  FloatGrid::Ptr sdf = FloatGrid::create(background);
+  sdf->setTransform(xform->copy());
+  sdf->setGridClass(openvdb::GRID_LEVEL_SET);
+  {
+    openvdb::FloatGrid::Accessor out = sdf->getAccessor();
+    for (int k = 0; k < dense.n[2]; ++k)
+      for (int j = 0; j < dense.n[1]; ++j)
+        for (int i = 0; i < dense.n[0]; ++i) {
+          const float value = phi[dense.index(i, j, k)];
+          if (std::abs(value) < background)
+            out.setValue(openvdb::Coord(i, j, k), value);
+          else if (value < 0.0f)
+            out.setValueOff(openvdb::Coord(i, j, k), -background);
+        }
+  }
+  std::vector<float>().swap(phi);
 
+  // Meshed slightly off zero: whole-voxel distances put exact zeros on grid points, where the
+  // iso-surface would collapse triangles. Should the mesh still hold a defect (a zero-area
+  // triangle, two faces crossing), the next of a few nearby iso-values is tried.
   std::vector<openvdb::Vec3s> points;
   std::vector<openvdb::Vec3I> triangles;
   std::vector<openvdb::Vec4I> quads;
-  // Slightly off zero: distances of whole voxels put exact zeros on grid points, where the
-  // iso-surface would collapse triangles to zero area.
-  openvdb::tools::volumeToMesh(*sdf, points, triangles, quads, 1e-3 * h, options.adaptivity);
   PolygonSoup soup;
-  soup.points.reserve(points.size());
-  for (const openvdb::Vec3s& p : points) soup.points.push_back({p[0], p[1], p[2]});
-  // volumeToMesh's polygons face into the negative (inside) region: reverse them.
-  for (const openvdb::Vec3I& t : triangles) soup.polygons.push_back({t[2], t[1], t[0]});
-  for (const openvdb::Vec4I& q : quads) soup.polygons.push_back({q[3], q[2], q[1], q[0]});
+  for (const double iso : {1e-3, 0.0137, 0.0291, -0.0113, 0.0457}) {
+    points.clear();
+    triangles.clear();
+    quads.clear();
+    openvdb::tools::volumeToMesh(*sdf, points, triangles, quads, iso * h, options.adaptivity);
+    soup = PolygonSoup{};
+    soup.points.reserve(points.size());
+    for (const openvdb::Vec3s& p : points) soup.points.push_back({p[0], p[1], p[2]});
+    // volumeToMesh's polygons face into the negative (inside) region: reverse them.
+    for (const openvdb::Vec3I& t : triangles) soup.polygons.push_back({t[2], t[1], t[0]});
+    for (const openvdb::Vec4I& q : quads) soup.polygons.push_back({q[3], q[2], q[1], q[0]});
+    if (find_surface_problems(soup).empty()) break;
+  }
   if (soup.polygons.empty())
     throw InputError(name + ": the repaired solid has no surface (nothing enclosed or thick)");
 

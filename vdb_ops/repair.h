@@ -6,11 +6,12 @@
 // within `closing` voxels of them are a dilated band that closes every hole and gap narrower than
 // about twice that; the outside is what a flood fill from the domain's boundary reaches around
 // the band; everything else is the dilated solid (overlapping parts become their union, a closed
-// cavity stays a cavity, an open sheet a slab). The solid is eroded back by the same distance
-// (the iso-surface `closing` voxels inside the band of a signed distance: the outside's own
-// distance to the band, the inside's Euclidean distance to the outside) and meshed with
-// volumeToMesh. So the repaired surface follows the input within about a voxel where the input is
-// a closed surface, and spans a hole with a smooth cap.
+// cavity stays a cavity). The solid is eroded back by the same distance (the distance to the
+// outside, from a Euclidean distance transform that knows each outside voxel's own distance to
+// the band), thin parts the erosion would remove (an open sheet) are kept as slabs about
+// `closing` voxels thick, the distance is smoothed once and meshed with volumeToMesh (at an
+// iso-value just off zero; a nearby one if the mesh has a defect). So the repaired surface
+// follows a closed input within about a fifth of a voxel and spans a hole with a smooth cap.
 #pragma once
 
 #include <cstddef>
