@@ -232,7 +232,8 @@ PolygonSoup repair_surface(const PolygonSoup& input, const RepairOptions& option
     dense.n[a] = static_cast<int>(std::ceil(span));
   }
   const double voxels = double(dense.n[0]) * dense.n[1] * dense.n[2];
-  check_memory_budget("repair", static_cast<std::size_t>(voxels * 10.0) + kProgramBytes,
+  // Dense arrays at their peak: state, two distances and the nearest sites, 13 bytes a voxel.
+  check_memory_budget("repair", static_cast<std::size_t>(voxels * 16.0) + kProgramBytes,
                       budget_bytes(options.max_memory_gb),
                       "the repair volume (" + std::to_string(dense.n[0]) + " x " +
                           std::to_string(dense.n[1]) + " x " + std::to_string(dense.n[2]) +
