@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -152,6 +153,88 @@ TEST(Repair, NothingToRepairAndTooLargeAClosingAreBadInput) {
     ADD_FAILURE() << "a closing of 20 voxels on a 48-voxel model was accepted";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("use at most 12"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Repair, TwentyRandomDefectMixesGiveValidSurfaces) {
+  // Shapes with 2 to 4 defects drawn at random (seeded): holes, flipped faces, an offset copy
+  // overlapping the original, vertices pushed through the far side (folds), a loose sheet, a
+  // duplicated face, every triangle with corners of its own. Each is refused as it is and
+  // repaired into a valid surface; every fifth is shelled and checked independently.
+  const char* shapes[] = {"sphere", "torus", "box", "horn", "star"};
+  std::mt19937 rng(2026);
+  const auto pick = [&](int n) { return std::uniform_int_distribution<int>(0, n - 1)(rng); };
+  for (int mix = 0; mix < 20; ++mix) {
+    const SurfaceMesh shape = make_shape(shapes[pick(5)]);
+    PolygonSoup soup = soup_of(shape);
+    std::vector<int> defects = {0, 1, 2, 3, 4, 5, 6};
+    std::shuffle(defects.begin(), defects.end(), rng);
+    defects.resize(std::size_t(2 + pick(3)));
+    std::string what;
+    for (const int d : defects) {
+      if (d == 0) {
+        what += " holes";
+        for (int k = 1 + pick(4); k > 0; --k)
+          soup.polygons.erase(soup.polygons.begin() + pick(int(soup.polygons.size())));
+      } else if (d == 1) {
+        what += " flips";
+        for (std::size_t k = 0; k < soup.polygons.size(); k += 17)
+          std::reverse(soup.polygons[k].begin(), soup.polygons[k].end());
+      } else if (d == 2) {
+        what += " overlap";
+        const Vec3d shift{0.1 * pick(5) - 0.2, 0.1 * pick(5) - 0.2, 0.15};
+        const std::int64_t n = std::int64_t(soup.points.size());
+        for (std::int64_t i = 0; i < n; ++i)
+          soup.points.push_back(soup.points[std::size_t(i)] + shift);
+        const std::size_t faces = soup.polygons.size();
+        for (std::size_t f = 0; f < faces; ++f) {
+          auto copy = soup.polygons[f];
+          for (auto& i : copy) i += n;
+          soup.polygons.push_back(copy);
+        }
+      } else if (d == 3) {
+        what += " folds";
+        for (std::size_t i = 0; i < shape.points.size(); i += 29)
+          soup.points[i] = soup.points[i] * -0.8;
+      } else if (d == 4) {
+        what += " sheet";
+        const std::int64_t n = std::int64_t(soup.points.size());
+        for (const Vec3d& p :
+             {Vec3d{-.6, -.6, .7}, Vec3d{.6, -.6, .7}, Vec3d{.6, .6, .7}, Vec3d{-.6, .6, .7}})
+          soup.points.push_back(p);
+        soup.polygons.push_back({n, n + 1, n + 2, n + 3});
+      } else if (d == 5) {
+        what += " duplicate";
+        soup.polygons.push_back(soup.polygons.front());
+      } else {
+        what += " seams";
+        PolygonSoup apart;
+        for (const auto& f : soup.polygons) {
+          std::vector<std::int64_t> g;
+          for (const std::int64_t i : f) {
+            apart.points.push_back(soup.points[std::size_t(i)]);
+            g.push_back(std::int64_t(apart.points.size()) - 1);
+          }
+          apart.polygons.push_back(g);
+        }
+        soup = apart;
+      }
+    }
+    EXPECT_THROW(make_surface(soup, "mix"), InputError) << mix << what;
+    const Repaired r = repair(soup, 32);  // \throw InternalError if the result did not validate
+    EXPECT_GT(r.surface.stats.enclosed_volume, 0.0) << mix << what;
+    std::vector<Vec3d> some;  // every 4th repaired vertex, against every input triangle
+    for (std::size_t i = 0; i < r.surface.mesh.points.size(); i += 4)
+      some.push_back(r.surface.mesh.points[i]);
+    EXPECT_LT(max_distance(some, soup), 4.0 * r.h) << mix << what;
+    if (mix % 5 != 0) continue;
+    ShellOptions options;
+    options.fields.resolution = 32;
+    const ShellResult shell = build_shell(r.surface, options);
+    EXPECT_EQ(
+        test::independent_shell_problems(r.surface.mesh, shell.mesh, 2 * shell.validity.sectors),
+        "")
+        << mix << what;
   }
 }
 
