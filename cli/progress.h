@@ -53,6 +53,7 @@ class Progress {
   }
   /// A library stage's report (RunControl::progress): 0 starts it, 1 ends it.
   void update(const std::string& stage, double fraction) {
+    if (!open_ && stage == name_) return;  // late news of the stage that just ended
     if (!open_ || stage != name_) {
       start(stage);
       return;

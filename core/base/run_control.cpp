@@ -67,11 +67,15 @@ void StageMonitor::finish() const {
 void StageMonitor::emit(double fraction, bool force) const {
   if (!progress_) return;
   std::lock_guard<std::mutex> lock(mutex_);
+  // Once 1 is reported (by finish() or a worker's last advance()), the stage is over: another
+  // report would reopen it.
+  if (finished_) return;
   fraction = std::clamp(fraction, reported_, 1.0);
   const auto now = std::chrono::steady_clock::now();
   if (!force && now - last_ < kReportInterval) return;
   last_ = now;
   reported_ = fraction;
+  finished_ = fraction >= 1.0;
   progress_(stage_, fraction);
 }
 

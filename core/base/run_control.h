@@ -71,6 +71,7 @@ class StageMonitor {
   std::string stage_;
   mutable std::mutex mutex_;
   mutable double reported_ = 0.0;
+  mutable bool finished_ = false;  ///< finish() reported 1: later reports are dropped
   mutable std::chrono::steady_clock::time_point last_{};
   mutable std::atomic<std::size_t> done_{0};
   mutable std::atomic<std::size_t> alive_calls_{0};
