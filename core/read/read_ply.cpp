@@ -168,6 +168,14 @@ bool fits(Type t, double v) {
   return true;
 }
 
+/// The value of type T in the first bytes of `b` (host order).
+template <class T>
+double as(const unsigned char* b) {
+  T v;
+  std::memcpy(&v, b, sizeof v);
+  return static_cast<double>(v);
+}
+
 /// The values of a PLY body, one at a time, as doubles (every PLY type fits one exactly).
 class Body {
  public:
@@ -205,39 +213,21 @@ class Body {
     if (format_ == Header::Format::kBig) std::reverse(b, b + n);
     switch (type) {
       case Type::kInt8:
-        return static_cast<std::int8_t>(b[0]);
+        return as<std::int8_t>(b);
       case Type::kUint8:
-        return b[0];
-      case Type::kInt16: {
-        std::int16_t v;
-        std::memcpy(&v, b, 2);
-        return v;
-      }
-      case Type::kUint16: {
-        std::uint16_t v;
-        std::memcpy(&v, b, 2);
-        return v;
-      }
-      case Type::kInt32: {
-        std::int32_t v;
-        std::memcpy(&v, b, 4);
-        return v;
-      }
-      case Type::kUint32: {
-        std::uint32_t v;
-        std::memcpy(&v, b, 4);
-        return v;
-      }
-      case Type::kFloat32: {
-        float v;
-        std::memcpy(&v, b, 4);
-        return v;
-      }
-      case Type::kFloat64: {
-        double v;
-        std::memcpy(&v, b, 8);
-        return v;
-      }
+        return as<std::uint8_t>(b);
+      case Type::kInt16:
+        return as<std::int16_t>(b);
+      case Type::kUint16:
+        return as<std::uint16_t>(b);
+      case Type::kInt32:
+        return as<std::int32_t>(b);
+      case Type::kUint32:
+        return as<std::uint32_t>(b);
+      case Type::kFloat32:
+        return as<float>(b);
+      case Type::kFloat64:
+        return as<double>(b);
     }
     return 0;
   }
