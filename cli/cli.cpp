@@ -54,6 +54,7 @@ struct CliOptions {
   std::string paths;
   std::string inner;
   std::string report;
+  std::string html;
   int msh_version = 41;
   double timeout = 0;  ///< seconds per input, 0: none
   std::string integrator = "rk2";
@@ -198,8 +199,13 @@ void check_outputs(const CliOptions& o) {
     folder_exists(o.repaired, "--repaired");
   }
   if (!o.report.empty()) folder_exists(o.report, "--report");
-  if (o.output.empty() && (!o.paths.empty() || !o.inner.empty() || !o.report.empty()))
-    throw InputError("--paths, --inner and --report describe a shell: give -o OUTPUT too");
+  if (!o.html.empty()) {
+    if (!ext_is(o.html, ".html")) throw InputError("--html " + o.html + ": must end in .html");
+    folder_exists(o.html, "--html");
+  }
+  if (o.output.empty() &&
+      (!o.paths.empty() || !o.inner.empty() || !o.report.empty() || !o.html.empty()))
+    throw InputError("--paths, --inner, --report and --html describe a shell: give -o OUTPUT too");
 }
 
 /// With several inputs, -o (and --report) name folders: created if missing, but a path that
@@ -228,6 +234,7 @@ void check_batch(const CliOptions& o) {
   };
   check_dir(o.output, "-o", "-o shells/");
   if (!o.report.empty()) check_dir(o.report, "--report", "--report reports/");
+  if (!o.html.empty()) check_dir(o.html, "--html", "--html pages/");
   std::vector<std::string> stems;
   for (const std::string& in : o.inputs) stems.push_back(fs::path(in).stem().string());
   std::sort(stems.begin(), stems.end());
@@ -235,6 +242,9 @@ void check_batch(const CliOptions& o) {
   if (dup != stems.end())
     throw InputError("two inputs have the name " + *dup + ": their outputs would collide in " +
                      o.output + "; rename one or run them in separate calls");
+  if (!o.html.empty() && std::binary_search(stems.begin(), stems.end(), "index"))
+    throw InputError("an input named index would overwrite the index page of --html " + o.html +
+                     "/index.html; rename it or run it in a separate call");
 }
 
 /// What one run of the pipeline produced.
@@ -278,7 +288,10 @@ struct RunOutcome {
   std::string summary;  ///< the one-line summary (without "vdb_shell: ")
   std::size_t tets = 0;
   double coverage = 0;
+  double min_quality = 0;
+  double median_quality = 0;
   double seconds = 0;
+  std::string thumbnail;  ///< html_thumbnail() of the result, in batch mode with --html
 };
 
 /// The one-line summary of a shell on stderr.
@@ -296,7 +309,7 @@ std::string summary_line(const std::string& output, const ShellResult& r, double
 /// Runs the whole pipeline on `opt.input` (options already checked). Prints the summary to `out`
 /// when there is no output; writes the outputs and the --report file otherwise.
 RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& err,
-                        const std::string& progress_prefix) {
+                        const std::string& progress_prefix, bool thumbnail = false) {
   const auto t_total = Clock::now();
   const bool shell_wanted = !opt.output.empty();
   // Stages: read; with --grids alone also fields, trace, write; with -o all six.
@@ -387,12 +400,16 @@ RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& 
   outcome.report = report_json(r, files, t_read, t_write);
   if (!opt.report.empty())
     write_file_atomically(opt.report, [&](std::ostream& os) { os << outcome.report; });
+  if (!opt.html.empty()) write_html(opt.html, r, files, t_read, t_write);
+  if (thumbnail) outcome.thumbnail = html_thumbnail(r);
   outputs.commit();
   if (opt.verbose) err << "vdb_shell: timings: " << progress.timings() << "\n";
 
   outcome.shell = true;
   outcome.tets = r.mesh.tets.size();
   outcome.coverage = r.quality.coverage;
+  outcome.min_quality = r.quality.min_quality;
+  outcome.median_quality = r.quality.median_quality;
   outcome.seconds = t_all;
   outcome.summary = summary_line(opt.output, r, t_all);
   return outcome;
@@ -418,23 +435,36 @@ int run_batch(const CliOptions& opt, std::ostream& out, std::ostream& err) {
   try {
     fs::create_directories(opt.output);
     if (!opt.report.empty()) fs::create_directories(opt.report);
+    if (!opt.html.empty()) fs::create_directories(opt.html);
   } catch (const fs::filesystem_error& e) {
     throw ResourceError(std::string("cannot create the output folder: ") + e.what());
   }
   int failures = 0, bad_input = 0;
+  std::vector<HtmlIndexRow> index;
   for (const std::string& input : opt.inputs) {
     CliOptions one = opt;
     one.input = input;
     const std::string stem = fs::path(input).stem().string();
     one.output = (fs::path(opt.output) / (stem + "." + opt.format)).string();
     if (!opt.report.empty()) one.report = (fs::path(opt.report) / (stem + ".json")).string();
+    if (!opt.html.empty()) one.html = (fs::path(opt.html) / (stem + ".html")).string();
+    HtmlIndexRow row;
+    row.input = input;
     std::string error;
     bool is_bad_input = false;
     try {
-      const RunOutcome r = run_pipeline(one, out, err, "[" + stem + "] ");
+      RunOutcome r = run_pipeline(one, out, err, "[" + stem + "] ", !opt.html.empty());
       out << input << "\tok\t" << r.tets << "\t" << fmt(r.coverage) << "\t"
           << fmt_seconds(r.seconds) << "\t" << one.output << "\n"
           << std::flush;
+      row.page = stem + ".html";
+      row.thumbnail = std::move(r.thumbnail);
+      row.tets = r.tets;
+      row.coverage = r.coverage;
+      row.min_quality = r.min_quality;
+      row.median_quality = r.median_quality;
+      row.seconds = r.seconds;
+      index.push_back(std::move(row));
       continue;
     } catch (const InputError& e) {
       error = e.what();
@@ -451,6 +481,13 @@ int run_batch(const CliOptions& opt, std::ostream& out, std::ostream& err) {
     err << "vdb_shell: error: " << (error.rfind(input, 0) == 0 ? "" : input + ": ") << error
         << "\n";
     out << input << "\terror\t" << error << "\n" << std::flush;
+    row.error = error;
+    index.push_back(std::move(row));
+  }
+  if (!opt.html.empty()) {
+    const std::string page = html_index(index);
+    write_file_atomically((fs::path(opt.html) / "index.html").string(),
+                          [&](std::ostream& os) { os << page; });
   }
   if (failures == 0) return kExitOk;
   return failures == bad_input ? kExitBadInput : kExitFailure;
@@ -583,6 +620,12 @@ void register_options(CLI::App& app, CliOptions& opt) {
   app.add_option("--inner", opt.inner, "Write the inner surface (.obj .ply .off)")->group(og);
   app.add_option("--report", opt.report,
                  "Write the JSON report here too (several inputs: a folder, one <stem>.json each)")
+      ->group(og);
+  app.add_option("--html", opt.html,
+                 "Write a self-contained HTML page with pictures of the shell, its quality and "
+                 "the run's figures (several inputs: a folder, one <stem>.html each and "
+                 "index.html)")
+      ->type_name("FILE.html")
       ->group(og);
   app.add_flag("-q,--quiet", opt.quiet, "Print only errors")->group(og);
   app.add_flag("-v,--verbose", opt.verbose, "Print more detail and per-stage timings")->group(og);

@@ -6,9 +6,9 @@ set -euo pipefail
 
 packages=(
   build-essential cmake ninja-build ccache pkg-config clang-format clang libclang-rt-14-dev
-  libopenvdb-dev libboost-dev libtbb-dev
+  libopenvdb-dev libboost-dev libtbb-dev libpng-dev
   libgtest-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev
-  libopenvdb-tools gmsh tetgen
+  libopenvdb-tools gmsh tetgen chromium
   python3-meshio python3-numpy python3-scipy python3-matplotlib
   python3-dev pybind11-dev python3-pytest
 )

@@ -16,7 +16,8 @@ double tet_quality(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& 
   return 6.0 * std::sqrt(2.0) * tet_volume(a, b, c, d) / (l_rms * l_rms * l_rms);
 }
 
-double tet_min_dihedral_deg(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
+std::array<double, 6> tet_dihedrals_deg(const Vec3d& a, const Vec3d& b, const Vec3d& c,
+                                        const Vec3d& d) {
   // n[k]: normal of the face opposite corner k, pointing away from corner k.
   const std::array<Vec3d, 4> p = {a, b, c, d};
   std::array<Vec3d, 4> n;
@@ -27,19 +28,25 @@ double tet_min_dihedral_deg(const Vec3d& a, const Vec3d& b, const Vec3d& c, cons
     Vec3d m = cross(v - u, w - u);
     if (dot(m, p[k] - u) > 0.0) m = -m;
     const double len = norm(m);
-    if (!(len > 0.0)) return 0.0;
+    if (!(len > 0.0)) return {};
     n[k] = m / len;
   }
   // The dihedral angle at the edge shared by the faces opposite k and l is pi minus the angle
-  // between their outward normals.
-  double min_angle = kPi;
-  for (int k = 0; k < 4; ++k) {
-    for (int l = k + 1; l < 4; ++l) {
-      const double c_kl = std::clamp(-dot(n[k], n[l]), -1.0, 1.0);
-      min_angle = std::min(min_angle, std::acos(c_kl));
-    }
+  // between their outward normals; edge e of kTetEdge joins corners i and j, so its faces are
+  // the ones opposite the other two corners.
+  std::array<double, 6> angles;
+  for (int e = 0; e < 6; ++e) {
+    int k = -1, l = -1;
+    for (int m = 0; m < 4; ++m)
+      if (m != kTetEdge[e][0] && m != kTetEdge[e][1]) (k < 0 ? k : l) = m;
+    angles[e] = std::acos(std::clamp(-dot(n[k], n[l]), -1.0, 1.0)) * 180.0 / kPi;
   }
-  return min_angle * 180.0 / kPi;
+  return angles;
+}
+
+double tet_min_dihedral_deg(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
+  const std::array<double, 6> angles = tet_dihedrals_deg(a, b, c, d);
+  return *std::min_element(angles.begin(), angles.end());
 }
 
 std::vector<double> tet_qualities(const TetMesh& mesh) {

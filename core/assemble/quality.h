@@ -9,6 +9,7 @@
 // Volumes are in world units cubed (the input's units).
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <vector>
 
@@ -21,6 +22,11 @@ namespace vdb_shell {
 /// Volume-length ratio of tet (a, b, c, d): 1 regular, 0 flat, < 0 inverted. 0 when every edge
 /// has zero length.
 double tet_quality(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d);
+
+/// The six dihedral angles of tet (a, b, c, d), degrees in [0, 180), at the edges of kTetEdge in
+/// order; all 0 when a face has zero area.
+std::array<double, 6> tet_dihedrals_deg(const Vec3d& a, const Vec3d& b, const Vec3d& c,
+                                        const Vec3d& d);
 
 /// Smallest of the six dihedral angles of tet (a, b, c, d), degrees in [0, 180). 0 when a face
 /// has zero area.

@@ -207,6 +207,36 @@ struct ReportFiles {
 std::string report_json(const ShellResult& result, const ReportFiles& files = {},
                         double read_seconds = 0, double write_seconds = 0);
 
+/// The HTML report of a run (docs/report.md): one self-contained page — the input, cut-away
+/// pictures of the shell, cross-sections, thickness and worst-tet pictures, the traces, the
+/// quality and dihedral-angle histograms and the run's figures (report_json() among them).
+/// Rendered in software, deterministic: the same result gives the same bytes. A traces_only
+/// result gets the input and the traces only.
+std::string report_html(const ShellResult& result, const ReportFiles& files = {},
+                        double read_seconds = 0, double write_seconds = 0);
+
+/// Writes report_html() to `path`, atomically.
+void write_html(const std::string& path, const ShellResult& result, const ReportFiles& files = {},
+                double read_seconds = 0, double write_seconds = 0);
+
+/// A 200 x 160 cut-away picture of the shell (PNG bytes) for html_index(); empty for a result
+/// without tets.
+std::string html_thumbnail(const ShellResult& result);
+
+/// One input of a batch's index page.
+struct HtmlIndexRow {
+  std::string input;      ///< the input file
+  std::string page;       ///< its report_html() page, relative to the index (empty: failed)
+  std::string thumbnail;  ///< html_thumbnail() of its result (may be empty)
+  std::string error;      ///< why it failed (empty: it succeeded)
+  std::size_t tets = 0;
+  double coverage = 0, min_quality = 0, median_quality = 0, seconds = 0;
+};
+
+/// The index page of a batch: one row per input (thumbnail, tets, coverage, quality, time,
+/// status) linking each input's page.
+std::string html_index(const std::vector<HtmlIndexRow>& rows);
+
 /// Writes the shell to `path`, format from its extension (.vtu .vtk .msh .mesh .ele; .msh as
 /// Gmsh `msh_version` 41 or 22), atomically (core/write/shell_writers.h).
 /// \throw InputError for an unknown extension; ResourceError if the file cannot be written, or

@@ -237,7 +237,9 @@ TEST(Repair, TwentyRandomDefectMixesGiveValidSurfaces) {
     for (std::size_t i = 0; i < r.surface.mesh.points.size(); i += 4)
       some.push_back(r.surface.mesh.points[i]);
     EXPECT_LT(max_distance(some, soup), 4.0 * r.h) << mix << what;
-    if (mix % 5 == 0) EXPECT_EQ(shell_problems(r.surface.mesh, 32), "") << mix << what;
+    if (mix % 5 == 0) {
+      EXPECT_EQ(shell_problems(r.surface.mesh, 32), "") << mix << what;
+    }
   }
 }
 
