@@ -1,6 +1,8 @@
 // test_support.cpp — see test_support.h.
 #include "tests/test_support.h"
 
+#include "cli/cli.h"
+
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -59,6 +61,18 @@ CommandResult run_command(const std::string& command) {
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   r.out = read_text(out);
   r.err = read_text(err);
+  return r;
+}
+
+CliRun cli(std::vector<std::string> args) {
+  args.insert(args.begin(), "vdb_shell");
+  std::vector<const char*> argv;
+  for (const auto& a : args) argv.push_back(a.c_str());
+  std::ostringstream out, err;
+  CliRun r;
+  r.code = run_cli(static_cast<int>(argv.size()), argv.data(), out, err);
+  r.out = out.str();
+  r.err = err.str();
   return r;
 }
 

@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "core/base/surface_mesh.h"
 #include "core/base/tet_mesh.h"
@@ -40,6 +41,13 @@ struct CommandResult {
 CommandResult run_command(const std::string& command);
 
 /// Paths of the built executables.
+/// What run_cli() (cli/cli.h) did with `args` (without the program name), in this process.
+struct CliRun {
+  int code = -1;
+  std::string out, err;
+};
+CliRun cli(std::vector<std::string> args);
+
 std::string vdb_shell_bin();
 std::string vdb_shell_shapes_bin();
 

@@ -33,21 +33,12 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-struct CliRun {
-  int code = -1;
-  std::string out, err;
+struct CliRun : test::CliRun {
   json report;  ///< stdout parsed when it holds the JSON report, else null
 };
 
 CliRun cli(std::vector<std::string> args) {
-  args.insert(args.begin(), "vdb_shell");
-  std::vector<const char*> argv;
-  for (const auto& a : args) argv.push_back(a.c_str());
-  std::ostringstream out, err;
-  CliRun r;
-  r.code = run_cli(static_cast<int>(argv.size()), argv.data(), out, err);
-  r.out = out.str();
-  r.err = err.str();
+  CliRun r{test::cli(std::move(args)), {}};
   if (r.code == 0 && !r.out.empty() && r.out.front() == '{') r.report = json::parse(r.out);
   return r;
 }
@@ -396,6 +387,7 @@ const std::map<std::string, std::string>& shown_elsewhere() {
       {"--repair-closing", "CliRepair.AHoleIsRefusedWithTheHintAndRepairedWithIt"},
       {"--repair-voxel-size", "CliRepair.AHoleIsRefusedWithTheHintAndRepairedWithIt"},
       {"--repaired", "CliRepair.AHoleIsRefusedWithTheHintAndRepairedWithIt"},
+      {"--html", "CliHtml.APageWithEveryPictureNextToTheShell"},
   };
   return m;
 }

@@ -34,18 +34,8 @@ using test::TempDir;
 const char* kTetObj = "v 0 0 0\nv 2 0 0\nv 0 2 0\nv 0 0 2\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n";
 
 /// Runs run_cli in-process and returns {exit code, stdout, stderr}.
-struct InProcess {
-  int code;
-  std::string out, err;
-};
-InProcess cli(std::vector<std::string> args) {
-  args.insert(args.begin(), "vdb_shell");
-  std::vector<const char*> argv;
-  for (const auto& a : args) argv.push_back(a.c_str());
-  std::ostringstream out, err;
-  const int code = run_cli(static_cast<int>(argv.size()), argv.data(), out, err);
-  return {code, out.str(), err.str()};
-}
+using InProcess = test::CliRun;
+using test::cli;
 
 TEST(Cli, SummaryOfAValidSurface) {
   TempDir dir;
