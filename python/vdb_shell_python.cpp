@@ -496,4 +496,15 @@ PYBIND11_MODULE(vdb_shell, m) {
       "Writes every vertex's trace as VTK polylines (.vtk) atomically. Raises ResourceError if "
       "the file cannot be written.",
       py::arg("path"), py::arg("result"));
+  m.def(
+      "write_html",
+      [](py::handle path, const PyShellResult& result) {
+        const std::string p = to_path(path, "path");
+        write_released([&] { vdb_shell::write_html(p, *result.result); });
+      },
+      "write_html(path, result)\n\n"
+      "Writes the HTML report of the run (what vdb_shell --html writes: cut-away pictures, "
+      "cross-sections, thickness, traces, quality histograms and the run's figures, in one "
+      "self-contained page) atomically. Raises ResourceError if the file cannot be written.",
+      py::arg("path"), py::arg("result"));
 }

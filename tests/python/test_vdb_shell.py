@@ -9,11 +9,13 @@
 # Environment (set by CTest, python/CMakeLists.txt): PYTHONPATH names the module's folder;
 # VDB_SHELL_SHAPES_BIN, the vdb_shell_shapes executable; VDB_SHELL_SHARED_MESHES, the folder of
 # the shared mesh corpus (tests using either skip without it).
+import base64
 import json
 import os
 import re
 import select
 import signal
+import struct
 import subprocess
 import sys
 import textwrap
@@ -537,6 +539,25 @@ def test_write_traces(sphere_shell, tmp_path):
     assert path.is_file() and "POLYDATA" in path.read_text()
 
 
+def test_write_html(sphere_shell, tmp_path):
+    path = tmp_path / "report.html"
+    vdb_shell.write_html(path, sphere_shell)
+    page = path.read_text()
+    assert page.startswith("<!DOCTYPE html>")
+    assert f"{len(sphere_shell.tets)} tets from" in page
+    pictures = re.findall(r'<img class="pic" width="(\d+)" height="(\d+)"[^>]*'
+                          r'src="data:image/png;base64,([^"]+)"', page)
+    assert len(pictures) == 8
+    for width, height, data in pictures:
+        png = base64.b64decode(data)
+        assert png[:8] == b"\x89PNG\r\n\x1a\n"
+        assert struct.unpack(">II", png[16:24]) == (int(width), int(height))
+    assert page.count("<svg") == 5  # three sections, two histograms
+    with pytest.raises(vdb_shell.ResourceError):
+        vdb_shell.write_html(tmp_path / "missing" / "report.html", sphere_shell)
+    assert not (tmp_path / "missing").exists()
+
+
 def test_load_surface_round_trip(tmp_path):
     v, f = cube()
     path = tmp_path / "cube.obj"
@@ -616,7 +637,7 @@ def test_library_doc_example(tmp_path):
 def test_module_metadata():
     assert vdb_shell.__version__.count(".") == 2
     for name in ("build_shell", "load_surface", "write", "write_inner", "write_traces",
-                 "ShellResult", "InputError"):
+                 "write_html", "ShellResult", "InputError"):
         assert getattr(vdb_shell, name).__doc__
     assert "thickness_edge_factor" in vdb_shell.build_shell.__doc__
     assert issubclass(vdb_shell.InputError, ValueError)
