@@ -10,10 +10,12 @@
 
 #include "core/assemble/quality.h"
 #include "core/base/memory_budget.h"
+#include "core/base/tet_faces.h"
 #include "core/render/pictures.h"
 #include "core/render/raster.h"
 #include "core/render/sections.h"
 #include "core/write/atomic_file.h"
+#include "pipeline/html_report.h"
 #include "vdb_shell/vdb_shell.h"
 
 namespace vdb_shell {
@@ -222,6 +224,29 @@ std::string page_head(const std::string& title) {
 
 }  // namespace
 
+std::size_t estimate_html_bytes(const SurfaceMesh& surface, const TetMesh& mesh) {
+  const std::size_t tets = mesh.tets.size();
+  // Tets cut by the three middle planes: each becomes about 170 bytes of SVG path, held in the
+  // section and again in the page.
+  const BBox box = bounding_box(surface);
+  const Vec3d centre = (box.lo + box.hi) * 0.5;
+  std::size_t cut = 0;
+  for (const Tet& t : mesh.tets)
+    for (int a = 0; a < 3; ++a) {
+      int above = 0;
+      for (const std::uint32_t v : t) above += mesh.points[v][a] >= centre[a];
+      cut += above != 0 && above != 4;
+    }
+  const std::size_t faces = 4 * tets * (sizeof(FaceRecord) + sizeof(std::int64_t) + 1);
+  const std::size_t angles = 6 * tets * sizeof(double);
+  const std::size_t per_triangle =
+      surface.triangles.size() * (3 * sizeof(Rgb) + 2 * sizeof(double));
+  const std::size_t canvas =
+      std::size_t(kSupersample * 560) * (kSupersample * 480) * (sizeof(Rgb) + sizeof(float));
+  const std::size_t pictures = 8 * std::size_t(560 * 480 * 3) * 2;  // PNG and base64, worst case
+  return faces + angles + per_triangle + canvas + pictures + 2 * 170 * cut;
+}
+
 std::string html_thumbnail(const ShellResult& r) {
   if (r.mesh.tets.empty()) return {};
   const BBox box = r.input.stats.bbox;
@@ -234,6 +259,10 @@ std::string html_thumbnail(const ShellResult& r) {
 
 std::string report_html(const ShellResult& r, const ReportFiles& files, double read_seconds,
                         double write_seconds) {
+  check_memory_budget("write", r.memory.write_html, budget_bytes(r.options.fields.max_memory_gb),
+                      "making the HTML report of " + std::to_string(r.mesh.tets.size()) +
+                          " tets (the tet faces, 8 pictures, 3 sections)",
+                      "drop --html, or raise --max-memory");
   const InputReport& in = r.input;
   const SurfaceStats& st = in.stats;
   const BBox box = st.bbox;

@@ -4,6 +4,8 @@
 // the tests and the benchmarks call it.
 #include "vdb_shell/vdb_shell.h"
 
+#include "pipeline/html_report.h"
+
 #include <tbb/task_arena.h>
 #include <nlohmann/json.hpp>
 
@@ -132,9 +134,14 @@ std::size_t result_bytes(const ShellResult& r) {
          memory_bytes(r.traces) + fields_bytes(r);
 }
 
-/// MemoryEstimates::write_shell and ::write_fields of a result.
+/// MemoryEstimates::write_shell, ::write_html and ::write_fields of a result.
 std::size_t write_shell_estimate(const ShellResult& r) {
   return kProgramBytes + result_bytes(r) + estimate_write_bytes(r.mesh);
+}
+std::size_t write_html_estimate(const ShellResult& r) {
+  return r.mesh.tets.empty()
+             ? 0
+             : kProgramBytes + result_bytes(r) + estimate_html_bytes(r.surface, r.mesh);
 }
 std::size_t write_fields_estimate(const ShellResult& r) {
   return r.fields
@@ -308,6 +315,7 @@ ShellResult run(const LoadedSurface& surface, const ShellOptions& options,
   }
   memory.write_shell = write_shell_estimate(r);
   memory.write_fields = write_fields_estimate(r);
+  memory.write_html = write_html_estimate(r);
   r.timings.total = seconds_since(t_total);
   return r;
 }
@@ -497,7 +505,8 @@ std::string report_json(const ShellResult& r, const ReportFiles& files, double r
                     {"inner", gib(m.inner)},
                     {"validity", gib(m.validity)},
                     {"write_shell", gib(m.write_shell)},
-                    {"write_fields", gib(m.write_fields)}};
+                    {"write_fields", gib(m.write_fields)},
+                    {"write_html", gib(m.write_html)}};
   const StageTimings& t = r.timings;
   j["timings_s"] = {{"read", read_seconds},
                     {"fields", t.fields},

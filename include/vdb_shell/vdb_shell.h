@@ -124,6 +124,7 @@ struct MemoryEstimates {
   std::size_t validity = 0;      ///< the validity search and the assembled shell, traces held
   std::size_t write_shell = 0;   ///< write_shell() of this result (the result held)
   std::size_t write_fields = 0;  ///< write_fields() of this result (0 without keep_fields)
+  std::size_t write_html = 0;    ///< report_html() / write_html() of this result (0: no shell)
 };
 
 /// Seconds per stage (wall time of this call; reading and writing files are the caller's).
@@ -212,6 +213,8 @@ std::string report_json(const ShellResult& result, const ReportFiles& files = {}
 /// quality and dihedral-angle histograms and the run's figures (report_json() among them).
 /// Rendered in software, deterministic: the same result gives the same bytes. A traces_only
 /// result gets the input and the traces only.
+/// \throw ResourceError (before any work) if the result held and the page's own memory are
+///        estimated above result.options.fields.max_memory_gb (MemoryEstimates::write_html).
 std::string report_html(const ShellResult& result, const ReportFiles& files = {},
                         double read_seconds = 0, double write_seconds = 0);
 

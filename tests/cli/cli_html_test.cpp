@@ -2,6 +2,9 @@
 // the other outputs or not at all.
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
 #include <filesystem>
 #include <regex>
 #include <string>
@@ -68,6 +71,32 @@ TEST(CliHtml, AFailedRunWritesNoPage) {
   EXPECT_EQ(r.code, 2);
   EXPECT_FALSE(std::filesystem::exists(dir.file("r.html")));
   EXPECT_FALSE(std::filesystem::exists(dir.file("s.vtu")));
+}
+
+TEST(CliHtml, APageOverTheMemoryBudgetExits3AndWritesNothing) {
+  TempDir dir;
+  write_surface(dir.file("sphere.obj"), make_shape("sphere"));
+  const std::vector<std::string> run = {
+      dir.file("sphere.obj"), "-r", "32", "-o", dir.file("s.vtu"), "--html",
+      dir.file("s.html"),     "-q"};
+  std::vector<std::string> with_report = run;
+  with_report.insert(with_report.end(), {"--report", dir.file("r.json")});
+  ASSERT_EQ(cli(with_report).code, 0);
+  const auto memory = nlohmann::json::parse(test::read_text(dir.file("r.json")))["memory_gb"];
+  double others = 0;
+  for (const auto& [key, gib] : memory.items())
+    if (key != "budget" && key != "write_html") others = std::max(others, gib.get<double>());
+  const double html = memory["write_html"].get<double>();
+  ASSERT_GT(html, others);  // the page's pictures outgrow every stage of this small run
+  for (const char* f : {"s.vtu", "s.html", "r.json"}) std::filesystem::remove(dir.file(f));
+  std::vector<std::string> tight = run;
+  tight.insert(tight.end(), {"--max-memory", std::to_string((html + others) / 2)});
+  const CliRun r = cli(tight);
+  EXPECT_EQ(r.code, 3) << r.err;
+  EXPECT_EQ(r.err.rfind("vdb_shell: error: write: about ", 0), 0u) << r.err;
+  EXPECT_NE(r.err.find("HTML report"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("s.vtu")));
+  EXPECT_FALSE(std::filesystem::exists(dir.file("s.html")));
 }
 
 TEST(CliHtml, BatchWritesAPagePerInputAndAnIndexRowForEach) {

@@ -87,6 +87,7 @@ TEST(Pipeline, ReportHasEveryDocumentedKey) {
                           "/memory_gb/validity",
                           "/memory_gb/write_shell",
                           "/memory_gb/write_fields",
+                          "/memory_gb/write_html",
                           "/timings_s/total"})
     EXPECT_TRUE(j.contains(nlohmann::json::json_pointer(key))) << key;
   EXPECT_EQ(j["input"]["file"], "horn");
