@@ -202,7 +202,7 @@ double percentile(std::vector<double> v, double p) {
 }
 
 const char* kStyle = R"(<style>
-body{font-family:sans-serif;margin:24px auto;max-width:1520px;color:#222;background:#fff}
+body{font-family:sans-serif;margin:24px auto;padding:0 16px;max-width:1520px;color:#222;background:#fff}
 h1{font-size:22px;margin:0 0 4px}h2{font-size:18px;margin:28px 0 8px;border-bottom:1px solid #ddd}
 p.lead{margin:4px 0 12px;color:#444}
 table{border-collapse:collapse;font-size:14px}th,td{padding:3px 10px;text-align:left;vertical-align:top}
@@ -250,7 +250,7 @@ std::size_t estimate_html_bytes(const SurfaceMesh& surface, const TetMesh& mesh)
 std::string html_thumbnail(const ShellResult& r) {
   if (r.mesh.tets.empty()) return {};
   const BBox box = r.input.stats.bbox;
-  const CutView v = cut_view(0);
+  const CutView v = cut_view(1);
   const Camera camera = Camera::framing(box, v.forward, v.up, 200, 160);
   const ShellFaces faces = shell_faces(r.mesh, r.surface);
   return encode_png(
