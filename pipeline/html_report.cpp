@@ -392,8 +392,8 @@ std::string report_html(const ShellResult& r, const ReportFiles& files, double r
     h << img(render_traces(r.surface, tr, camera, kMaxTraces, kSupersample), camera, "traces")
       << "<figcaption>"
       << (tr.num_traces() > kMaxTraces
-              ? "Every " + std::to_string((tr.num_traces() + kMaxTraces - 1) / kMaxTraces) +
-                    "th of the " + std::to_string(tr.num_traces()) + " traces"
+              ? "One in " + std::to_string((tr.num_traces() + kMaxTraces - 1) / kMaxTraces) +
+                    " of the " + std::to_string(tr.num_traces()) + " traces"
               : "All " + std::to_string(tr.num_traces()) + " traces")
       << ", from the surface vertex to where it stopped.</figcaption></figure><table>\n";
   }
