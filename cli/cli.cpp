@@ -594,6 +594,16 @@ void register_options(CLI::App& app, CliOptions& opt) {
                  "can move (0: only from inverted ones)")
       ->check(CLI::Range(0.0, 0.5))
       ->group(th);
+  CLI::Option* optimize =
+      app.add_flag("--optimize", opt.shell.optimize.enabled,
+                   "After the validity search, move inner vertices (never outward, within the "
+                   "thickness limits) to raise the worst tets' quality and smallest dihedral angle")
+          ->group(th);
+  app.add_flag_callback(
+         "--no-optimize", [&opt] { opt.shell.optimize.enabled = false; },
+         "Do not optimise (the default)")
+      ->excludes(optimize)
+      ->group(th);
 
   const char* og = "Output";
   app.add_option("-o,--output", opt.output,

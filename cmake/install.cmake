@@ -21,7 +21,7 @@ install(FILES include/vdb_shell/vdb_shell.h DESTINATION ${CMAKE_INSTALL_INCLUDED
 foreach(header
     base/errors.h base/run_control.h base/surface_mesh.h base/tet_mesh.h base/vec3.h
     read/load_surface.h read/polygon_soup.h trace/field_sampler.h trace/point_index.h
-    trace/trace.h inner/inner.h validity/search.h validity/shell_checks.h
+    trace/trace.h inner/inner.h validity/optimize.h validity/search.h validity/shell_checks.h
     assemble/assemble.h assemble/quality.h)
   get_filename_component(folder ${header} DIRECTORY)
   install(FILES core/${header} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/vdb_shell/core/${folder})

@@ -282,6 +282,14 @@ ShellResult run(const LoadedSurface& surface, const ShellOptions& options,
             : "lower --resolution or raise --step (shorter traces), or give a surface with fewer "
               "faces, or raise --max-memory");
     ValidShell valid = make_valid_shell(work, work_traces, inner, options.validity, monitor);
+    if (options.optimize.enabled && valid.checks.valid()) {
+      const QualitySummary before = summarize_quality(work, valid.shell.mesh);
+      r.optimize.min_quality_before = before.min_quality;
+      r.optimize.p5_quality_before = before.p5_quality;
+      r.optimize.min_dihedral_deg_before = before.min_dihedral_deg;
+      r.optimize.coverage_before = before.coverage;
+      r.optimize.report = optimize_shell(work, inner.limit, valid, options.optimize);
+    }
     if (valid.checks.valid() && !split.empty()) {
       const SectorShell sectors = join_sectors(mesh, split, valid, options.validity.min_quality);
       r.validity.gap_tets = sectors.gap_tets;
@@ -480,6 +488,17 @@ std::string report_json(const ShellResult& r, const ReportFiles& files, double r
                     {"min_dihedral_deg", q.min_dihedral_deg},
                     {"non_positive", q.non_positive},
                     {"histogram", q.histogram}};
+    const OptimizeSummary& o = r.optimize;
+    j["optimize"] = {{"enabled", r.options.optimize.enabled},
+                     {"sweeps", o.report.sweeps},
+                     {"checks", o.report.checks},
+                     {"moved_vertices", o.report.moved_vertices},
+                     {"reverted_moves", o.report.reverted},
+                     {"min_quality_before", o.min_quality_before},
+                     {"p5_before", o.p5_quality_before},
+                     {"min_dihedral_deg_before", o.min_dihedral_deg_before},
+                     {"coverage_before", o.coverage_before},
+                     {"seconds", o.report.seconds}};
   }
   if (r.repair) {
     const RepairReport& p = *r.repair;

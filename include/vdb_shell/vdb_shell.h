@@ -37,6 +37,7 @@
 #include "core/inner/inner.h"
 #include "core/read/load_surface.h"
 #include "core/trace/trace.h"
+#include "core/validity/optimize.h"
 #include "core/validity/search.h"
 #include "core/validity/shell_checks.h"
 #include "vdb_ops/fields.h"
@@ -51,6 +52,7 @@ struct ShellOptions {
   TraceOptions trace;          ///< --planar-angle, --step, --critical, --point-size, ...
   ThicknessOptions thickness;  ///< --max-thickness, --thickness-edge-factor
   ValidityOptions validity;    ///< --min-quality
+  OptimizeOptions optimize;    ///< --optimize / --no-optimize
   /// A .vdb file whose level set is the distance field, instead of building one (--level-set).
   std::string level_set;
   /// Grid of `level_set` (or of build_shell_from_level_set()'s file) to use (--grid); empty:
@@ -102,6 +104,16 @@ struct ValidityReport {
   std::size_t floor_drops = 0;
   bool floor_valid = true;
   double seconds = 0;
+};
+
+/// What --optimize did (core/validity/optimize.h): the quality before it; ShellResult::quality
+/// is after.
+struct OptimizeSummary {
+  OptimizeReport report;
+  double min_quality_before = 0;
+  double p5_quality_before = 0;
+  double min_dihedral_deg_before = 0;
+  double coverage_before = 0;
 };
 
 /// Counts of the assembled shell (its tets and points: ShellResult::mesh).
@@ -158,6 +170,7 @@ struct ShellResult {
   ShellCheckResult checks;  ///< the final full check (valid())
   ValidityReport validity;
   QualitySummary quality;  ///< histogram, min/median/mean Q, coverage, volume
+  OptimizeSummary optimize;
   StageTimings timings;
   MemoryEstimates memory;  ///< every stage's estimated peak, checked against --max-memory
   /// What --repair did (set by the caller that repaired the input: load_repaired_surface()).

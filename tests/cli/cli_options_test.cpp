@@ -388,6 +388,8 @@ const std::map<std::string, std::string>& shown_elsewhere() {
       {"--repair-voxel-size", "CliRepair.AHoleIsRefusedWithTheHintAndRepairedWithIt"},
       {"--repaired", "CliRepair.AHoleIsRefusedWithTheHintAndRepairedWithIt"},
       {"--html", "CliHtml.APageWithEveryPictureNextToTheShell"},
+      {"--optimize", "Optimize.ValidThickAndNeverWorseAtItsWorst"},
+      {"--no-optimize", "Optimize.OffByDefaultAndReported"},
   };
   return m;
 }

@@ -539,6 +539,17 @@ def test_write_traces(sphere_shell, tmp_path):
     assert path.is_file() and "POLYDATA" in path.read_text()
 
 
+def test_optimize_option(sphere):
+    plain = vdb_shell.build_shell(*sphere, resolution=RESOLUTION)
+    optimized = vdb_shell.build_shell(*sphere, resolution=RESOLUTION, optimize=True)
+    assert plain.report["optimize"]["enabled"] is False
+    report = optimized.report["optimize"]
+    assert report["enabled"] is True
+    assert report["p5_before"] == pytest.approx(plain.report["quality"]["p5"])
+    assert optimized.report["quality"]["min"] >= plain.report["quality"]["min"]
+    assert np.array_equal(optimized.tets, plain.tets)
+
+
 def test_write_html(sphere_shell, tmp_path):
     path = tmp_path / "report.html"
     vdb_shell.write_html(path, sphere_shell)
