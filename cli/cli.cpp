@@ -312,8 +312,9 @@ RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& 
                         const std::string& progress_prefix, bool thumbnail = false) {
   const auto t_total = Clock::now();
   const bool shell_wanted = !opt.output.empty();
-  // Stages: read; with --grids alone also fields, trace, write; with -o all six.
-  const int stages = shell_wanted ? 6 : (opt.grids.empty() ? 1 : 4);
+  // Stages: read; with --grids alone also fields, trace, write; with -o all six, and html with
+  // --html.
+  const int stages = shell_wanted ? (opt.html.empty() ? 6 : 7) : (opt.grids.empty() ? 1 : 4);
   Progress progress(err, opt.progress_mode(), stages, progress_prefix);
   RunOutcome outcome;
 
@@ -400,8 +401,12 @@ RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& 
   outcome.report = report_json(r, files, t_read, t_write);
   if (!opt.report.empty())
     write_file_atomically(opt.report, [&](std::ostream& os) { os << outcome.report; });
-  if (!opt.html.empty()) write_html(opt.html, r, files, t_read, t_write);
-  if (thumbnail) outcome.thumbnail = html_thumbnail(r);
+  if (!opt.html.empty()) {
+    progress.start("html");
+    write_html(opt.html, r, files, t_read, t_write);
+    if (thumbnail) outcome.thumbnail = html_thumbnail(r);
+    progress.stop();
+  }
   outputs.commit();
   if (opt.verbose) err << "vdb_shell: timings: " << progress.timings() << "\n";
 

@@ -40,6 +40,12 @@ TEST(CliHtml, APageWithEveryPictureNextToTheShell) {
   EXPECT_EQ(count_of(page, "<svg"), 5u);                // 3 sections, 2 histograms
   EXPECT_EQ(count_of(page, "src=\"http"), 0u);          // nothing fetched from anywhere
   EXPECT_NE(page.find(dir.file("horn.vtu")), std::string::npos);  // names the shell it shows
+  // With --progress the page is a seventh stage.
+  const CliRun p = cli({dir.file("horn.obj"), "-o", dir.file("horn.vtu"), "--html",
+                        dir.file("horn.html"), "-r", "48", "--progress"});
+  ASSERT_EQ(p.code, 0) << p.err;
+  EXPECT_NE(p.err.find("[6/7] write ..."), std::string::npos) << p.err;
+  EXPECT_NE(p.err.find("[7/7] html ..."), std::string::npos) << p.err;
 }
 
 TEST(CliHtml, BadPathsExit2BeforeAnyWork) {
