@@ -295,11 +295,17 @@ std::string report_html(const ShellResult& r, const ReportFiles& files, double r
   h << row("oriented", in.flipped ? "inward in the file: flipped" : "outward");
   if (r.repair) {
     const RepairReport& p = *r.repair;
-    h << row("repair", "rebuilt watertight through a volume (voxel " + num(p.voxel_size) +
-                           ", closing " + num(p.closing) + " voxels): " + count_of(p.input_faces) +
-                           " input polygons, " + count_of(p.holes_closed) + " holes closed, " +
-                           count_of(p.faces) + " faces; repaired to input distance max " +
-                           num(p.distance_max) + ", mean " + num(p.distance_mean));
+    if (p.kept)
+      h << row("repair",
+               "none needed: the input is closed, 2-manifold and does not cross "
+               "itself, kept as it is");
+    else
+      h << row("repair", "rebuilt watertight through a volume (voxel " + num(p.voxel_size) +
+                             ", closing " + num(p.closing) +
+                             " voxels): " + count_of(p.input_faces) + " input polygons, " +
+                             count_of(p.holes_closed) + " holes closed, " + count_of(p.faces) +
+                             " faces; repaired to input distance max " + num(p.distance_max) +
+                             ", mean " + num(p.distance_mean));
   }
   std::string notices;
   for (const std::string& n : r.notices) notices += "<li>" + escape(n) + "</li>";

@@ -372,6 +372,24 @@ LoadedSurface load_repaired_surface(const PolygonSoup& soup, const std::string& 
   }
   if (!(repair.voxel_size > 0))
     throw InputError(source + ": nothing to repair: its points span no length");
+  // A surface that validates as it is needs no rebuilding: kept, exactly (validation's own
+  // fixes, e.g. an inward surface flipped, still apply).
+  const auto t0 = Clock::now();
+  try {
+    LoadedSurface kept = make_surface(soup, source);
+    report = RepairReport{};
+    report.kept = true;
+    report.voxel_size = repair.voxel_size;
+    report.closing = repair.closing;
+    report.input_faces = soup.polygons.size();
+    report.faces = kept.mesh.triangles.size();
+    report.seconds = seconds_since(t0);
+    kept.notices.insert(kept.notices.begin(),
+                        "the input is already closed, 2-manifold and not crossing itself: "
+                        "--repair kept it as it is");
+    return kept;
+  } catch (const InputError&) {  // something to repair
+  }
   const PolygonSoup rebuilt = repair_surface(soup, repair, source, report);
   try {
     LoadedSurface surface = make_surface(rebuilt, source + " (repaired)");
@@ -502,7 +520,7 @@ std::string report_json(const ShellResult& r, const ReportFiles& files, double r
   }
   if (r.repair) {
     const RepairReport& p = *r.repair;
-    j["repair"] = {{"method", "closing"},
+    j["repair"] = {{"method", p.kept ? "kept" : "closing"},
                    {"voxel_size", p.voxel_size},
                    {"closing", p.closing},
                    {"input_faces", p.input_faces},

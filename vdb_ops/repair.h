@@ -30,6 +30,9 @@ struct RepairOptions {
 
 /// What a repair did (the report's `repair` section). Distances in input units.
 struct RepairReport {
+  /// The input was already a closed, 2-manifold surface not crossing itself, and was kept as it
+  /// is (load_repaired_surface(): method "kept"; every distance 0): nothing was rebuilt.
+  bool kept = false;
   double voxel_size = 0.0;
   double closing = 0.0;          ///< voxels
   std::size_t input_faces = 0;   ///< polygons of the input

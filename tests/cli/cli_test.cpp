@@ -216,6 +216,22 @@ TEST(CliRepair, AHoleIsRefusedWithTheHintAndRepairedWithIt) {
   EXPECT_EQ(cli({dir.file("x.vdb"), "--repair"}).code, 2);
 }
 
+TEST(CliRepair, ACleanInputIsKeptAndGivesThePlainShell) {
+  TempDir dir;
+  const std::string in = dir.file("horn.obj");
+  write_surface(in, make_shape("horn"));
+  ASSERT_EQ(cli({in, "-r", "48", "-o", dir.file("plain.vtu"), "-q"}).code, 0);
+  const InProcess r = cli(
+      {in, "-r", "48", "--repair", "-o", dir.file("repaired.vtu"), "--report", dir.file("r.json")});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("--repair kept it as it is"), std::string::npos) << r.err;
+  EXPECT_EQ(test::read_text(dir.file("plain.vtu")), test::read_text(dir.file("repaired.vtu")));
+  const auto repair = nlohmann::json::parse(test::read_text(dir.file("r.json")))["repair"];
+  EXPECT_EQ(repair["method"], "kept");
+  EXPECT_EQ(repair["distance_max"], 0.0);
+  EXPECT_EQ(repair["faces"], 408);
+}
+
 TEST(CliBatch, OneGoodOneBadInputExit2AndOneLineEach) {
   TempDir dir;
   test::write_text(dir.file("tet.obj"), kTetObj);

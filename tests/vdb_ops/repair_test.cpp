@@ -71,22 +71,41 @@ Repaired repair(const PolygonSoup& soup, int resolution = 48, double closing = 2
   return r;
 }
 
-TEST(Repair, CleanSphereStaysWithinAVoxel) {
+TEST(Repair, ACleanSurfaceIsKeptAsItIs) {
+  const SurfaceMesh sphere = make_shape("sphere");
+  const Repaired r = repair(soup_of(sphere));
+  EXPECT_TRUE(r.report.kept);
+  EXPECT_EQ(r.surface.mesh.points, sphere.points);
+  EXPECT_EQ(r.surface.mesh.triangles, sphere.triangles);
+  EXPECT_EQ(r.report.faces, sphere.triangles.size());
+  EXPECT_EQ(r.report.distance_max, 0.0);
+  EXPECT_EQ(r.report.input_distance_max, 0.0);
+}
+
+TEST(Repair, ACleanSphereRebuiltStaysWithinAVoxel) {
+  // The volume path itself (repair_surface(), which load_repaired_surface() skips for a clean
+  // input) on the clean sphere at 48 voxels across.
   const SurfaceMesh sphere = make_shape("sphere");
   const PolygonSoup input = soup_of(sphere);
-  const Repaired r = repair(input);
-  EXPECT_EQ(r.surface.stats.components, 1u);
-  EXPECT_EQ(r.surface.stats.genus, 0);
-  EXPECT_EQ(r.report.holes_closed, 0u);
-  const double out = max_distance(r.surface.mesh.points, input);
-  const double back = max_distance(input.points, soup_of(r.surface.mesh));
-  EXPECT_LT(out, 1.0 * r.h) << out / r.h << " voxels";
-  EXPECT_LT(back, 1.0 * r.h) << back / r.h << " voxels";
+  RepairOptions options;
+  options.voxel_size = bounding_box(sphere).max_side() / 48;
+  RepairReport report;
+  const LoadedSurface rebuilt =
+      make_surface(repair_surface(input, options, "sphere", report), "sphere (repaired)");
+  const double h = options.voxel_size;
+  EXPECT_FALSE(report.kept);
+  EXPECT_EQ(rebuilt.stats.components, 1u);
+  EXPECT_EQ(rebuilt.stats.genus, 0);
+  EXPECT_EQ(report.holes_closed, 0u);
+  const double out = max_distance(rebuilt.mesh.points, input);
+  const double back = max_distance(input.points, soup_of(rebuilt.mesh));
+  EXPECT_LT(out, 1.0 * h) << out / h << " voxels";
+  EXPECT_LT(back, 1.0 * h) << back / h << " voxels";
   // The report's sampled distances agree with the brute force.
-  EXPECT_NEAR(r.report.distance_max, out, 0.25 * r.h);
-  EXPECT_NEAR(r.report.input_distance_max, back, 0.25 * r.h);
+  EXPECT_NEAR(report.distance_max, out, 0.25 * h);
+  EXPECT_NEAR(report.input_distance_max, back, 0.25 * h);
   const double volume = make_surface(input, "sphere").stats.enclosed_volume;
-  EXPECT_NEAR(r.surface.stats.enclosed_volume, volume, 0.02 * volume);
+  EXPECT_NEAR(rebuilt.stats.enclosed_volume, volume, 0.02 * volume);
 }
 
 TEST(Repair, PunchedHolesAreCapped) {
@@ -158,8 +177,10 @@ TEST(Repair, NothingToRepairAndTooLargeAClosingAreBadInput) {
   none.points = {{0, 0, 0}};
   none.polygons = {{0, 5, 7}};
   EXPECT_THROW(repair(none), InputError);
+  PolygonSoup holed = soup_of(make_shape("sphere"));  // a clean one is kept, whatever the closing
+  holed.polygons.pop_back();
   try {
-    repair(soup_of(make_shape("sphere")), 48, 20.0);
+    repair(holed, 48, 20.0);
     ADD_FAILURE() << "a closing of 20 voxels on a 48-voxel model was accepted";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("use at most 12"), std::string::npos) << e.what();
