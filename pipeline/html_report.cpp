@@ -80,8 +80,8 @@ std::string base64(const std::string& bytes) {
   return out;
 }
 
-/// An <img> of `image`, with the camera's scale and centre as data attributes (the browser test
-/// measures silhouettes with them).
+/// An <img> of `image`, with the camera's scale as a data attribute (the browser test measures
+/// silhouettes with it).
 std::string img(const Image& image, const Camera& camera, const std::string& alt) {
   return "<img class=\"pic\" width=\"" + std::to_string(image.width) + "\" height=\"" +
          std::to_string(image.height) + "\" data-scale=\"" + num(camera.scale, 9) + "\" alt=\"" +
@@ -105,6 +105,34 @@ CutView cut_view(int axis) {
   forward[b] = -0.4;
   if (axis == 2) up = {0, 1, 0};
   return {cut, forward, up};
+}
+
+/// The shell cut away as cut_view(axis) shows it, `width` x `height`.
+struct CutAway {
+  Camera camera;
+  Image image;
+};
+CutAway cut_away(const ShellResult& r, const ShellFaces& faces, const BBox& box, int axis,
+                 int width, int height) {
+  const CutView v = cut_view(axis);
+  const Camera camera = Camera::framing(box, v.forward, v.up, width, height);
+  return {camera,
+          render_cut_away(r.mesh, faces, camera, (box.lo + box.hi) * 0.5, v.cut, kSupersample)};
+}
+
+/// Two figures of the surface coloured per corner, from view(0) and view(1), each with `alt`
+/// and ", front" / ", back" and the caption.
+std::string front_and_back(const ShellResult& r, const BBox& box, const std::vector<Rgb>& corner,
+                           const std::string& alt, const std::string& caption) {
+  std::string out;
+  for (int i = 0; i < 2; ++i) {
+    const Camera camera = Camera::framing(box, view(i), {0, 0, 1}, 480, 420);
+    out += "<figure>" +
+           img(render_surface(r.surface, corner, camera, kSupersample), camera,
+               alt + (i == 0 ? ", front" : ", back")) +
+           "<figcaption>" + caption + "</figcaption></figure>\n";
+  }
+  return out;
 }
 
 std::string legend_swatch(const Rgb& c, const std::string& label) {
@@ -249,12 +277,8 @@ std::size_t estimate_html_bytes(const SurfaceMesh& surface, const TetMesh& mesh)
 
 std::string html_thumbnail(const ShellResult& r) {
   if (r.mesh.tets.empty()) return {};
-  const BBox box = r.input.stats.bbox;
-  const CutView v = cut_view(1);
-  const Camera camera = Camera::framing(box, v.forward, v.up, 200, 160);
-  const ShellFaces faces = shell_faces(r.mesh, r.surface);
   return encode_png(
-      render_cut_away(r.mesh, faces, camera, (box.lo + box.hi) * 0.5, v.cut, kSupersample));
+      cut_away(r, shell_faces(r.mesh, r.surface), r.input.stats.bbox, 1, 200, 160).image);
 }
 
 std::string report_html(const ShellResult& r, const ReportFiles& files, double read_seconds,
@@ -320,10 +344,8 @@ std::string report_html(const ShellResult& r, const ReportFiles& files, double r
     h << "<h2>Cut-away views</h2><div class=\"grid\">\n";
     const char* axis_name[3] = {"x", "y", "z"};
     for (int a = 0; a < 3; ++a) {
-      const CutView v = cut_view(a);
-      const Camera camera = Camera::framing(box, v.forward, v.up, 480, 420);
-      const Image image = render_cut_away(r.mesh, faces, camera, centre, v.cut, kSupersample);
-      h << "<figure>" << img(image, camera, std::string("cut-away at ") + axis_name[a])
+      const CutAway view = cut_away(r, faces, box, a, 480, 420);
+      h << "<figure>" << img(view.image, view.camera, std::string("cut-away at ") + axis_name[a])
         << "<figcaption>Tets with their centre at " << axis_name[a] << " &gt; " << num(centre[a])
         << " removed.</figcaption></figure>\n";
     }
@@ -350,16 +372,9 @@ std::string report_html(const ShellResult& r, const ReportFiles& files, double r
       for (int k = 0; k < 3; ++k)
         corner[3 * t + k] =
             ColourMap::sequential()(th_max > 0 ? th[r.surface.triangles[t][k]] / th_max : 0.0);
-    h << "<h2>Thickness</h2><div class=\"grid\">\n";
-    for (int i = 0; i < 2; ++i) {
-      const Camera camera = Camera::framing(box, view(i), {0, 0, 1}, 480, 420);
-      h << "<figure>"
-        << img(render_surface(r.surface, corner, camera, kSupersample), camera,
-               i == 0 ? "thickness, front" : "thickness, back")
-        << "<figcaption>" << (i == 0 ? "From the front." : "From the back.")
-        << "</figcaption></figure>\n";
-    }
-    h << "</div>"
+    h << "<h2>Thickness</h2><div class=\"grid\">\n"
+      << front_and_back(r, box, corner, "thickness", "From the front and from the back.")
+      << "</div>"
       << colour_bar(ColourMap::sequential(), 0, th_max,
                     "distance from each surface vertex to its inner vertex (world units)")
       << "<p>Thickness min " << num(th.empty() ? 0 : *std::min_element(th.begin(), th.end()))
@@ -378,16 +393,11 @@ std::string report_html(const ShellResult& r, const ReportFiles& files, double r
       }
     for (std::size_t t = 0; t < worst.size(); ++t)
       corner[3 * t] = corner[3 * t + 1] = corner[3 * t + 2] = qmap(worst[t]);
-    h << "<h2>Where the worst tets are</h2><div class=\"grid\">\n";
-    for (int i = 0; i < 2; ++i) {
-      const Camera camera = Camera::framing(box, view(i), {0, 0, 1}, 480, 420);
-      h << "<figure>"
-        << img(render_surface(r.surface, corner, camera, kSupersample), camera,
-               i == 0 ? "worst tet quality, front" : "worst tet quality, back")
-        << "<figcaption>Each surface triangle coloured by the lowest quality of the tets "
-        << "built on it.</figcaption></figure>\n";
-    }
-    h << "</div>" << colour_bar(qmap, 0, 1, "volume-length ratio") << "\n";
+    h << "<h2>Where the worst tets are</h2><div class=\"grid\">\n"
+      << front_and_back(r, box, corner, "worst tet quality",
+                        "Each surface triangle coloured by the lowest quality of the tets built "
+                        "on it.")
+      << "</div>" << colour_bar(qmap, 0, 1, "volume-length ratio") << "\n";
   }
 
   // Traces.
@@ -397,9 +407,9 @@ std::string report_html(const ShellResult& r, const ReportFiles& files, double r
     const Camera camera = Camera::framing(box, view(0), {0, 0, 1}, 560, 480);
     h << img(render_traces(r.surface, tr, camera, kMaxTraces, kSupersample), camera, "traces")
       << "<figcaption>"
-      << (tr.num_traces() > kMaxTraces
-              ? "One in " + std::to_string((tr.num_traces() + kMaxTraces - 1) / kMaxTraces) +
-                    " of the " + std::to_string(tr.num_traces()) + " traces"
+      << (trace_stride(tr.num_traces(), kMaxTraces) > 1
+              ? "One in " + std::to_string(trace_stride(tr.num_traces(), kMaxTraces)) + " of the " +
+                    std::to_string(tr.num_traces()) + " traces"
               : "All " + std::to_string(tr.num_traces()) + " traces")
       << ", from the surface vertex to where it stopped.</figcaption></figure><table>\n";
   }
@@ -441,10 +451,11 @@ std::string report_html(const ShellResult& r, const ReportFiles& files, double r
       << "<figcaption>Tet quality (paper Fig. 10); " << q.non_positive
       << " tets flat or inverted.</figcaption></figure><figure>";
     const double a_min = angles.empty() ? 0 : *std::min_element(angles.begin(), angles.end());
+    const double a_p5 = percentile(angles, 0.05), a_median = percentile(angles, 0.5);
     h << histogram_svg(dh, 0, 180, kDihedralBars,
                        {{"min " + num(a_min, 3), a_min},
-                        {"p5 " + num(percentile(angles, 0.05), 3), percentile(angles, 0.05)},
-                        {"median " + num(percentile(angles, 0.5), 3), percentile(angles, 0.5)}},
+                        {"p5 " + num(a_p5, 3), a_p5},
+                        {"median " + num(a_median, 3), a_median}},
                        "dihedral angle, degrees (all six of every tet, bins of 5)", 30)
       << "<figcaption>Dihedral angles; the regular tet's are 70.5 degrees.</figcaption>"
       << "</figure></div>\n";
@@ -516,11 +527,9 @@ std::string report_html(const ShellResult& r, const ReportFiles& files, double r
   const MemoryEstimates& m = r.memory;
   const auto gib = [](std::size_t b) { return num(double(b) / kBytesPerGiB, 3) + " GiB"; };
   h << row("budget (--max-memory)", m.budget ? gib(m.budget) : std::string("none"));
-  const std::vector<std::pair<std::string, std::size_t>> peaks = {{"fields", m.fields},
-                                                                  {"trace", m.trace},
-                                                                  {"inner", m.inner},
-                                                                  {"validity", m.validity},
-                                                                  {"write", m.write_shell}};
+  const std::vector<std::pair<std::string, std::size_t>> peaks = {
+      {"fields", m.fields},     {"trace", m.trace},       {"inner", m.inner},
+      {"validity", m.validity}, {"write", m.write_shell}, {"html", m.write_html}};
   std::size_t peak = m.surface;
   for (const auto& [name, b] : peaks) {
     h << row("peak estimate, " + name, gib(b));

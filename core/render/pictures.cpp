@@ -3,7 +3,6 @@
 #include <algorithm>
 
 #include "core/base/tet_faces.h"
-#include "core/render/raster.h"
 
 namespace vdb_shell {
 
@@ -111,8 +110,7 @@ Image render_traces(const SurfaceMesh& surface, const TraceResult& traces, const
   }
   canvas.fade(kBackground, 0.6);
   const std::size_t n = traces.num_traces();
-  const std::size_t every =
-      std::max<std::size_t>(1, (n + max_traces - 1) / std::max<std::size_t>(max_traces, 1));
+  const std::size_t every = trace_stride(n, max_traces);
   for (std::size_t v = 0; v < n; v += every) {
     const Rgb col = kStopColour[static_cast<std::size_t>(traces.stop[v])];
     for (std::size_t i = 0; i < traces.end[v]; ++i)

@@ -41,8 +41,14 @@ Image render_cut_away(const TetMesh& mesh, const ShellFaces& faces, const Camera
 Image render_surface(const SurfaceMesh& surface, const std::vector<Rgb>& corner_colour,
                      const Camera& camera, int supersample);
 
-/// The traces of about `max_traces` surface vertices (every n-th) as polylines coloured by stop
-/// reason (kStopColour) over a faded picture of the surface, from the surface vertex to the end.
+/// Which traces render_traces() draws: every trace_stride()-th of `traces`, at most `max_traces`.
+inline std::size_t trace_stride(std::size_t traces, std::size_t max_traces) {
+  return max_traces > 0 && traces > max_traces ? (traces + max_traces - 1) / max_traces : 1;
+}
+
+/// The traces of at most `max_traces` surface vertices (every trace_stride()-th) as polylines
+/// coloured by stop reason (kStopColour) over a faded picture of the surface, from the surface
+/// vertex to the end.
 Image render_traces(const SurfaceMesh& surface, const TraceResult& traces, const Camera& camera,
                     std::size_t max_traces, int supersample);
 
