@@ -286,12 +286,9 @@ struct RunOutcome {
   bool shell = false;   ///< false: summary or --grids only, nothing below is set
   std::string report;   ///< the JSON report
   std::string summary;  ///< the one-line summary (without "vdb_shell: ")
-  std::size_t tets = 0;
-  double coverage = 0;
-  double min_quality = 0;
-  double median_quality = 0;
-  double seconds = 0;
-  std::string thumbnail;  ///< html_thumbnail() of the result, in batch mode with --html
+  /// tets, coverage, quality, seconds and (in batch mode with --html) the thumbnail: the
+  /// batch's stdout line and its index row.
+  HtmlIndexRow figures;
 };
 
 /// The one-line summary of a shell on stderr.
@@ -404,18 +401,18 @@ RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& 
   if (!opt.html.empty()) {
     progress.start("html");
     write_html(opt.html, r, files, t_read, t_write);
-    if (thumbnail) outcome.thumbnail = html_thumbnail(r);
+    if (thumbnail) outcome.figures.thumbnail = html_thumbnail(r);
     progress.stop();
   }
   outputs.commit();
   if (opt.verbose) err << "vdb_shell: timings: " << progress.timings() << "\n";
 
   outcome.shell = true;
-  outcome.tets = r.mesh.tets.size();
-  outcome.coverage = r.quality.coverage;
-  outcome.min_quality = r.quality.min_quality;
-  outcome.median_quality = r.quality.median_quality;
-  outcome.seconds = t_all;
+  outcome.figures.tets = r.mesh.tets.size();
+  outcome.figures.coverage = r.quality.coverage;
+  outcome.figures.min_quality = r.quality.min_quality;
+  outcome.figures.median_quality = r.quality.median_quality;
+  outcome.figures.seconds = t_all;
   outcome.summary = summary_line(opt.output, r, t_all);
   return outcome;
 }
@@ -453,22 +450,16 @@ int run_batch(const CliOptions& opt, std::ostream& out, std::ostream& err) {
     one.output = (fs::path(opt.output) / (stem + "." + opt.format)).string();
     if (!opt.report.empty()) one.report = (fs::path(opt.report) / (stem + ".json")).string();
     if (!opt.html.empty()) one.html = (fs::path(opt.html) / (stem + ".html")).string();
-    HtmlIndexRow row;
-    row.input = input;
     std::string error;
     bool is_bad_input = false;
     try {
       RunOutcome r = run_pipeline(one, out, err, "[" + stem + "] ", !opt.html.empty());
-      out << input << "\tok\t" << r.tets << "\t" << fmt(r.coverage) << "\t"
-          << fmt_seconds(r.seconds) << "\t" << one.output << "\n"
+      HtmlIndexRow& row = r.figures;
+      out << input << "\tok\t" << row.tets << "\t" << fmt(row.coverage) << "\t"
+          << fmt_seconds(row.seconds) << "\t" << one.output << "\n"
           << std::flush;
+      row.input = input;
       row.page = stem + ".html";
-      row.thumbnail = std::move(r.thumbnail);
-      row.tets = r.tets;
-      row.coverage = r.coverage;
-      row.min_quality = r.min_quality;
-      row.median_quality = r.median_quality;
-      row.seconds = r.seconds;
       index.push_back(std::move(row));
       continue;
     } catch (const InputError& e) {
@@ -486,6 +477,8 @@ int run_batch(const CliOptions& opt, std::ostream& out, std::ostream& err) {
     err << "vdb_shell: error: " << (error.rfind(input, 0) == 0 ? "" : input + ": ") << error
         << "\n";
     out << input << "\terror\t" << error << "\n" << std::flush;
+    HtmlIndexRow row;
+    row.input = input;
     row.error = error;
     index.push_back(std::move(row));
   }
