@@ -178,8 +178,11 @@ OptimizeReport optimize_shell(const SurfaceMesh& surface, const std::vector<doub
         ++undone;
       }
       if (undone == 0) {  // offenders among no moved vertex: undo the whole sweep
-        for (std::size_t k = 0; k < moved.size(); ++k) mesh.points[n + moved[k]] = before[k];
-        report.reverted += moved.size();
+        for (std::size_t k = 0; k < moved.size(); ++k) {
+          Vec3d& at = mesh.points[n + moved[k]];
+          report.reverted += at != before[k];  // not counted again if undone above
+          at = before[k];
+        }
         checks = checker.check(mesh);
         ++report.checks;
         moved.clear();
