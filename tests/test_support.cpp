@@ -45,6 +45,12 @@ fs::path shared_checker() {
   return fs::is_regular_file(file) ? fs::canonical(file) : fs::path();
 }
 
+std::size_t count_of(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
 std::string read_text(const std::string& p) {
   std::ifstream in(p, std::ios::binary);
   std::ostringstream s;

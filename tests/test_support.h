@@ -54,6 +54,9 @@ std::string vdb_shell_shapes_bin();
 /// The bytes of `path` ("" when it cannot be read).
 std::string read_text(const std::string& path);
 
+/// How often `what` occurs in `text` (overlapping occurrences too).
+std::size_t count_of(const std::string& text, const std::string& what);
+
 /// Writes `text` to `path` (binary, exact bytes).
 void write_text(const std::string& path, const std::string& text);
 

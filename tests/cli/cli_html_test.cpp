@@ -22,12 +22,6 @@ using test::TempDir;
 using test::cli;
 using test::CliRun;
 
-std::size_t count_of(const std::string& text, const std::string& what) {
-  std::size_t n = 0;
-  for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
-  return n;
-}
-
 TEST(CliHtml, APageWithEveryPictureNextToTheShell) {
   TempDir dir;
   write_surface(dir.file("horn.obj"), make_shape("horn"));
@@ -36,9 +30,9 @@ TEST(CliHtml, APageWithEveryPictureNextToTheShell) {
   ASSERT_EQ(r.code, 0) << r.err;
   const std::string page = test::read_text(dir.file("horn.html"));
   EXPECT_EQ(page.rfind("<!DOCTYPE html>", 0), 0u);
-  EXPECT_EQ(count_of(page, "<img class=\"pic\""), 8u);  // 3 cut-aways, 2 + 2 surfaces, traces
-  EXPECT_EQ(count_of(page, "<svg"), 5u);                // 3 sections, 2 histograms
-  EXPECT_EQ(count_of(page, "src=\"http"), 0u);          // nothing fetched from anywhere
+  EXPECT_EQ(test::count_of(page, "<img class=\"pic\""), 8u);  // 3 cut-aways, 2 + 2 surfaces, traces
+  EXPECT_EQ(test::count_of(page, "<svg"), 5u);                // 3 sections, 2 histograms
+  EXPECT_EQ(test::count_of(page, "src=\"http"), 0u);          // nothing fetched from anywhere
   EXPECT_NE(page.find(dir.file("horn.vtu")), std::string::npos);  // names the shell it shows
   // With --progress the page is a seventh stage.
   const CliRun p = cli({dir.file("horn.obj"), "-o", dir.file("horn.vtu"), "--html",
@@ -126,7 +120,7 @@ TEST(CliHtml, BatchWritesAPagePerInputAndAnIndexRowForEach) {
        it != std::sregex_iterator(); ++it)
     linked.push_back((*it)[2].str());
   EXPECT_EQ(linked, (std::vector<std::string>{"horn", "", "box"}));
-  EXPECT_EQ(count_of(index, "<td class=\"bad\" colspan=\"5\">error: "), 1u);
+  EXPECT_EQ(test::count_of(index, "<td class=\"bad\" colspan=\"5\">error: "), 1u);
   EXPECT_NE(index.find("boundary edges"), std::string::npos);
 
   // A page named index would replace the index: refused before any work.

@@ -6,6 +6,7 @@
 
 #include "assets/shapes.h"
 #include "core/render/pictures.h"
+#include "tests/test_support.h"
 #include "vdb_shell/vdb_shell.h"
 
 namespace vdb_shell {
@@ -17,12 +18,6 @@ ShellResult sphere_shell(int threads = 0, bool traces_only = false) {
   o.threads = threads;
   o.traces_only = traces_only;
   return build_shell(make_shape("sphere"), o, {}, "sphere");
-}
-
-std::size_t count_of(const std::string& text, const std::string& what) {
-  std::size_t n = 0;
-  for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
-  return n;
 }
 
 /// A pixel of an outer-surface face: kOuterColour times a shading factor (blue is its largest
@@ -68,16 +63,16 @@ TEST(HtmlReport, SamePageForAnyThreadCountOnceTheTimesAreZero) {
   EXPECT_NE(page.find(std::to_string(one.mesh.tets.size()) + " tets from " +
                       std::to_string(one.surface.triangles.size()) + " surface triangles"),
             std::string::npos);
-  EXPECT_EQ(count_of(page, "<img class=\"pic\""), 8u);
-  EXPECT_EQ(count_of(page, "<svg"), 5u);
+  EXPECT_EQ(test::count_of(page, "<img class=\"pic\""), 8u);
+  EXPECT_EQ(test::count_of(page, "<svg"), 5u);
   EXPECT_NE(page.find("<span class=\"ok\">valid</span>"), std::string::npos);
 }
 
 TEST(HtmlReport, ATracesOnlyRunShowsTheInputAndTheTraces) {
   const ShellResult r = sphere_shell(0, true);
   const std::string page = report_html(r);
-  EXPECT_EQ(count_of(page, "<img class=\"pic\""), 1u);  // the traces
-  EXPECT_EQ(count_of(page, "<svg"), 0u);
+  EXPECT_EQ(test::count_of(page, "<img class=\"pic\""), 1u);  // the traces
+  EXPECT_EQ(test::count_of(page, "<svg"), 0u);
   EXPECT_NE(page.find("All " + std::to_string(r.surface.points.size()) + " traces"),
             std::string::npos);
   EXPECT_TRUE(html_thumbnail(r).empty());
