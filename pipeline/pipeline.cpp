@@ -21,7 +21,6 @@
 #include "core/validity/sector_shell.h"
 #include "core/write/shell_writers.h"
 #include "core/write/trace_writer.h"
-#include "vdb_ops/point_index_vdb.h"
 #include "vdb_ops/trace_points.h"
 
 namespace vdb_shell {
@@ -231,7 +230,7 @@ ShellResult run(const LoadedSurface& surface, const ShellOptions& options,
                             " samples, from " + std::to_string(estimate.pilot_traces) +
                             " traced ahead), with " + format_gib(double(grids)) + " of fields held",
                         "lower --resolution or raise --step, or raise --max-memory");
-    r.traces = trace_paths(mesh, *fields, options.trace, make_vdb_point_index, monitor);
+    r.traces = trace_paths(mesh, *fields, options.trace, monitor);
     if (!split.empty())
       split_traces = retrace_split(r.traces, split.surface, split.vertex, split.direction, *fields,
                                    options.trace);

@@ -7,6 +7,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include <cstddef>
 
@@ -40,6 +41,13 @@ void for_each_chunk(std::size_t n, const Body& body, std::size_t grain = 32) {
                       if (monitor) monitor->alive();
                       body(r.begin(), r.end());
                     });
+}
+
+/// Sorts [begin, end) by operator< in parallel. Deterministic only for a strict total order
+/// (no two elements equivalent): the order of equivalent elements is not kept.
+template <class Iterator>
+void parallel_sort(Iterator begin, Iterator end) {
+  tbb::parallel_sort(begin, end);
 }
 
 }  // namespace vdb_shell

@@ -7,7 +7,7 @@
 #include <unordered_map>
 
 #include "core/base/errors.h"
-#include "core/trace/point_index.h"
+#include "core/base/grid_cell.h"
 
 namespace vdb_shell {
 

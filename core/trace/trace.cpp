@@ -4,12 +4,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <limits>
 
 #include "core/base/errors.h"
 #include "core/base/memory_budget.h"
 #include "core/base/parallel.h"
 #include "core/base/timer.h"
+#include "core/trace/merges.h"
 
 namespace vdb_shell {
 namespace {
@@ -118,191 +118,6 @@ bool planar_fan(const std::vector<Vec3d>& normals, double cos_max) {
     for (std::size_t b = a + 1; b < normals.size(); ++b)
       if (dot(normals[a], normals[b]) < cos_max) return false;
   return true;
-}
-
-/// Direction of trace v at its sample i (unit, or zero for a single-sample trace).
-Vec3d sample_direction(const TraceResult& r, std::size_t v, std::size_t i) {
-  const std::size_t n = r.num_samples(v);
-  if (n < 2) return {};
-  return i + 1 < n ? normalized(r.sample(v, i + 1) - r.sample(v, i))
-                   : normalized(r.sample(v, i) - r.sample(v, i - 1));
-}
-
-// Merge queries work on chunks: runs of up to kChunkSamples consecutive samples of one trace,
-// each bounded by a sphere (centre, radius) and a cone of directions (axis, spread). The point
-// index holds chunk centres; a run of samples of the querying trace asks it once, and whole
-// chunks are rejected by a bound before any sample is looked at: same trace, traces that started
-// side by side, too far away, or every pair of directions closer than the merge angle (the
-// bundles where many traces converge onto one path and run together to a critical point, which
-// made per-sample queries return tens of thousands of samples). Survivors are tested sample by
-// sample with exactly the per-sample rule, in ascending (trace, sample) order, so the result is
-// the one a per-sample query over every sample gives.
-constexpr std::uint32_t kChunkSamples = 8;
-// Safety margins of the bounds (they only make the rejection more cautious): a fraction of the
-// point size on distances, and radians on angles (covers acos rounding near 0 and pi).
-constexpr double kDistanceMargin = 1e-2;
-constexpr double kAngleMargin = 1e-6;
-
-struct Chunk {
-  std::uint32_t trace = 0;
-  std::uint32_t first = 0, last = 0;  ///< samples [first, last] of `trace`
-  Vec3d centre;                       ///< world units
-  double radius = 0;                  ///< world units: every sample lies within it of `centre`
-  Vec3d axis;                         ///< unit; zero when the directions bound nothing
-  double spread = kPi;                ///< radians: every sample direction within it of `axis`
-  double cos_spread = -1, sin_spread = 0;
-  Vec3d start;  ///< sample 0 of `trace` (kept here for cache locality)
-};
-
-/// Bounding sphere and direction cone of samples [first, last] of trace v; `dirs` receives
-/// their directions (sample_direction).
-Chunk make_chunk(const TraceResult& r, std::uint32_t v, std::uint32_t first, std::uint32_t last,
-                 std::vector<Vec3d>& dirs) {
-  Chunk c;
-  c.trace = v;
-  c.first = first;
-  c.last = last;
-  c.centre = (r.sample(v, first) + r.sample(v, last)) * 0.5;
-  c.start = r.sample(v, 0);
-  Vec3d sum;
-  bool all_directed = true;
-  dirs.clear();
-  for (std::uint32_t m = first; m <= last; ++m) {
-    c.radius = std::max(c.radius, distance(r.sample(v, m), c.centre));
-    dirs.push_back(sample_direction(r, v, m));
-    all_directed = all_directed && norm2(dirs.back()) > 0.0;
-    sum += dirs.back();
-  }
-  c.axis = normalized(sum);
-  if (!all_directed || norm2(c.axis) == 0.0) {
-    c.axis = {};
-    return c;
-  }
-  double spread = 0;
-  for (const Vec3d& d : dirs)
-    spread = std::max(spread, std::acos(std::clamp(dot(d, c.axis), -1.0, 1.0)));
-  c.spread = spread + kAngleMargin;
-  c.cos_spread = std::cos(c.spread);
-  c.sin_spread = std::sin(c.spread);
-  return c;
-}
-
-/// Whether every direction of chunk `b` lies within the merge angle of every direction of the
-/// run whose axis is `axis` and whose spread leaves `budget` = merge angle - margin - run spread:
-/// angle(axes) + b.spread < budget, tested as a cosine (no acos per pair).
-bool same_way(const Vec3d& axis, double cos_budget, double sin_budget, double budget,
-              const Chunk& b) {
-  if (norm2(axis) == 0.0 || norm2(b.axis) == 0.0 || !(b.spread < budget)) return false;
-  // cos(budget - b.spread), the largest angle between the axes that still counts.
-  return dot(axis, b.axis) > cos_budget * b.cos_spread + sin_budget * b.sin_spread;
-}
-
-/// Ends every trace of `which` at its first merge with a sample of `indexed` traces
-/// (samples up to each indexed trace's current end).
-void resolve_merges(TraceResult& r, const std::vector<std::uint32_t>& which,
-                    const std::vector<std::uint32_t>& indexed,
-                    const PointIndexFactory& make_index) {
-  const double ps = r.parameters.point_size;
-  const double ps2 = ps * ps;
-  const double margin = kDistanceMargin * ps;
-  const double merge_angle = std::acos(std::clamp(r.parameters.cos_merge, -1.0, 1.0));
-
-  // Chunks of the samples another trace may merge into: not the last two point sizes of a trace
-  // (traces arriving together at a critical point end there). Arc length grows along a trace, so
-  // the eligible samples are a prefix. Chunk ids ascend with (position in `indexed`, sample).
-  std::vector<std::uint32_t> eligible(indexed.size());
-  for_each_index(indexed.size(), [&](std::size_t w) {
-    const std::uint32_t k = indexed[w];
-    std::uint32_t m = 0;
-    while (m <= r.end[k] && !(r.end_arc(k) - r.arc_length[r.offsets[k] + m] < 2.0 * ps)) ++m;
-    eligible[w] = m;
-  });
-  std::vector<std::size_t> chunk_begin(indexed.size() + 1, 0);
-  for (std::size_t w = 0; w < indexed.size(); ++w)
-    chunk_begin[w + 1] = chunk_begin[w] + (eligible[w] + kChunkSamples - 1) / kChunkSamples;
-  std::vector<Chunk> chunks(chunk_begin.back());
-  if (chunks.empty()) return;
-  for_each_chunk(indexed.size(), [&](std::size_t begin, std::size_t end) {
-    std::vector<Vec3d> dirs;
-    for (std::size_t w = begin; w < end; ++w)
-      for (std::size_t c = chunk_begin[w]; c < chunk_begin[w + 1]; ++c) {
-        const auto first = static_cast<std::uint32_t>((c - chunk_begin[w]) * kChunkSamples);
-        const std::uint32_t last = std::min(first + kChunkSamples, eligible[w]) - 1;
-        chunks[c] = make_chunk(r, indexed[w], first, last, dirs);
-      }
-  });
-  std::vector<Vec3d> centres(chunks.size());
-  double max_radius = 0;
-  for (std::size_t c = 0; c < chunks.size(); ++c) {
-    centres[c] = chunks[c].centre;
-    max_radius = std::max(max_radius, chunks[c].radius);
-  }
-  // Worst case of the querying run's own radius: (kChunkSamples - 1) steps of at most `step`.
-  const double query_pad = ps + max_radius + 0.5 * (kChunkSamples - 1) * r.parameters.step + margin;
-  const std::unique_ptr<PointIndex> index = make_index(centres, query_pad);
-
-  std::vector<std::uint32_t> new_end(which.size());
-  std::vector<std::int64_t> partner(which.size(), -1);
-  for_each_chunk(which.size(), [&](std::size_t begin, std::size_t end) {
-    std::vector<std::uint32_t> found, near;
-    std::vector<Vec3d> dirs;
-    for (std::size_t w = begin; w < end; ++w) {
-      const std::uint32_t j = which[w];
-      new_end[w] = r.end[j];
-      const Vec3d& pj = r.sample(j, 0);
-      for (std::uint32_t first = 0; first <= r.end[j] && partner[w] < 0; first += kChunkSamples) {
-        const std::uint32_t last = std::min(first + kChunkSamples - 1, r.end[j]);
-        const Chunk run = make_chunk(r, j, first, last, dirs);
-        index->find_within_unordered(run.centre, run.radius + ps + max_radius + margin, found);
-        near.clear();
-        const double budget = merge_angle - kAngleMargin - run.spread;
-        const double cos_budget = std::cos(budget), sin_budget = std::sin(budget);
-        for (std::uint32_t c : found) {
-          const Chunk& other = chunks[c];
-          if (distance(run.centre, other.centre) > run.radius + ps + other.radius + margin)
-            continue;
-          // Every pair of directions closer than the merge angle: running the same way.
-          if (same_way(run.axis, cos_budget, sin_budget, budget, other)) continue;
-          if (other.trace == j || distance(pj, other.start) < ps) continue;  // side by side
-          near.push_back(c);
-        }
-        if (near.empty()) continue;
-        std::sort(near.begin(), near.end());  // ascending (trace, sample): ties below
-        for (std::uint32_t i = first; i <= last; ++i) {
-          const Vec3d& q = r.sample(j, i);
-          const Vec3d& dj = dirs[i - first];
-          double best = std::numeric_limits<double>::infinity();
-          for (std::uint32_t c : near) {
-            const Chunk& other = chunks[c];
-            const double reach = ps + other.radius + margin;
-            if (norm2(q - other.centre) > reach * reach) continue;
-            const std::uint32_t k = other.trace;
-            for (std::uint32_t m = other.first; m <= other.last; ++m) {
-              const Vec3d& s = r.sample(k, m);
-              if (norm2(s - q) > ps2) continue;
-              if (dot(dj, sample_direction(r, k, m)) > r.parameters.cos_merge) continue;
-              const double d = distance(q, s);
-              if (d < best) {  // ascending (trace, sample): ties keep the smallest
-                best = d;
-                partner[w] = k;
-              }
-            }
-          }
-          if (partner[w] >= 0) {
-            new_end[w] = i;
-            break;
-          }
-        }
-      }
-    }
-  });
-  for (std::size_t w = 0; w < which.size(); ++w) {
-    if (partner[w] < 0) continue;
-    const std::uint32_t j = which[w];
-    r.end[j] = new_end[w];
-    r.stop[j] = StopReason::kMerge;
-    r.merged_with[j] = partner[w];
-  }
 }
 
 }  // namespace
@@ -463,8 +278,7 @@ TraceResult retrace_split(const TraceResult& traces, const SurfaceMesh& surface,
 }
 
 TraceResult trace_paths(const SurfaceMesh& mesh, const FieldSampler& fields,
-                        const TraceOptions& options, const PointIndexFactory& make_index,
-                        const StageMonitor& monitor) {
+                        const TraceOptions& options, const StageMonitor& monitor) {
   TraceResult r;
   r.parameters = derive_trace_parameters(options, fields.voxel_size(), bounding_box(mesh));
   const std::size_t n = mesh.points.size();
@@ -488,11 +302,11 @@ TraceResult trace_paths(const SurfaceMesh& mesh, const FieldSampler& fields,
   t0 = std::chrono::steady_clock::now();
   std::vector<std::uint32_t> non_planar, planar;
   for (std::uint32_t v = 0; v < n; ++v) (r.planar[v] ? planar : non_planar).push_back(v);
-  resolve_merges(r, non_planar, non_planar, make_index);
+  resolve_merges(r, non_planar, non_planar);
   monitor.report(0.9);
   std::vector<std::uint32_t> all(n);
   for (std::uint32_t v = 0; v < n; ++v) all[v] = v;
-  resolve_merges(r, planar, all, make_index);
+  resolve_merges(r, planar, all);
   r.seconds_merging = seconds_since(t0);
 
   for (StopReason s : r.stop) ++r.stop_count[static_cast<std::size_t>(s)];

@@ -9,12 +9,12 @@
 //   * the medial surface, for planar vertices only: flux(q) > rho (eq. 8), at the sample where
 //     the flux peaks (the flux rises over ~2 voxels before the surface; its peak is on it);
 //   * a safety cap on the number of steps.
-// Merges (criterion 1) are then resolved order-independently: each trace ends at its first
-// sample (by arc length) that lies within the point size of a sample of another trace, where
-// traces that *started* within the point size of each other, or that run within `merge_angle` of
-// the same direction, never merge (they are neighbours running side by side, not a junction), and
-// a trace does not merge into the last two point sizes of another (traces arriving together at a
-// critical point end there and are welded, they do not stop short of it).
+// Merges (criterion 1) are then resolved order-independently (merges.h): each trace ends at its
+// first sample (by arc length) that lies within the point size of a sample of another trace,
+// where traces that *started* within the point size of each other, or that run within
+// `merge_angle` of the same direction, never merge (they are neighbours running side by side, not
+// a junction), and a trace does not merge into the last two point sizes of another (traces
+// arriving together at a critical point end there and are welded, they do not stop short of it).
 // Non-planar traces are resolved first; planar traces then merge with the (already ended)
 // non-planar ones and with each other (paper Fig. 3). Every loop is parallel and each trace
 // writes only its own slot: the result is identical for any thread count.
@@ -28,7 +28,6 @@
 #include "core/base/run_control.h"
 #include "core/base/surface_mesh.h"
 #include "core/trace/field_sampler.h"
-#include "core/trace/point_index.h"
 
 namespace vdb_shell {
 
@@ -135,9 +134,7 @@ std::size_t memory_bytes(const TraceResult& traces);
 /// Traces every vertex of `mesh` through `fields` and resolves merges. Reports the fraction of
 /// traces done to `monitor` (tracing is 80% of the stage, merging the rest) and checks it.
 TraceResult trace_paths(const SurfaceMesh& mesh, const FieldSampler& fields,
-                        const TraceOptions& options,
-                        const PointIndexFactory& make_index = make_hash_point_index,
-                        const StageMonitor& monitor = StageMonitor());
+                        const TraceOptions& options, const StageMonitor& monitor = StageMonitor());
 
 /// The traces of a surface made from the traced one by splitting vertices (sectors.h): point u
 /// takes trace source[u] of `traces` when first_direction[u] is zero; otherwise it gets a trace

@@ -1,5 +1,5 @@
-// trace_vdb_test.cpp — path tracing (core/trace/trace.h) on real OpenVDB fields
-// (vdb_ops/fields.h) and the PointIndexGrid point index (vdb_ops/point_index_vdb.h).
+// trace_vdb_test.cpp — path tracing and merge resolution (core/trace/trace.h, merges.h) on real
+// OpenVDB fields (vdb_ops/fields.h).
 //
 // References: the cube [-0.5, 0.5]^3 (every trace of the paper's 2x2-per-face box runs straight
 // to the centre; its medial surface is where the two largest |x_i| tie), the sphere of radius 0.5
@@ -7,15 +7,14 @@
 // are built once per (shape, resolution) and shared. Tolerances are in voxels.
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
-#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <memory>
-#include <random>
 #include <string>
 #include <utility>
 #include <vector>
@@ -24,7 +23,6 @@
 #include "core/trace/trace.h"
 #include "tests/straight_traces.h"
 #include "vdb_ops/fields.h"
-#include "vdb_ops/point_index_vdb.h"
 
 namespace vdb_shell {
 namespace {
@@ -79,66 +77,6 @@ void expect_identical(const TraceResult& a, const TraceResult& b, const std::str
   EXPECT_TRUE(same_bytes(a.merged_with, b.merged_with)) << what;
   EXPECT_EQ(a.stop_count, b.stop_count) << what;
 }
-
-// --- the PointIndexGrid point index ------------------------------------------------------------
-
-TEST(VdbPointIndex, ReturnsExactlyTheHashGridsIndices) {
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<double> coord(-1.0, 1.0);
-  std::vector<Vec3d> points(20000);
-  for (Vec3d& p : points) p = {coord(rng), coord(rng), coord(rng)};
-  // Duplicates and points exactly one radius apart along an axis (boundary cases).
-  const double radius = 0.03;
-  for (std::size_t n = 0; n < 200; ++n) points.push_back(points[n]);
-  for (std::size_t n = 0; n < 200; ++n) points.push_back(points[n] + Vec3d(radius, 0, 0));
-  const auto hash = make_hash_point_index(points, radius);
-  const auto vdb = make_vdb_point_index(points, radius);
-  std::vector<std::uint32_t> a, b;
-  std::size_t total = 0;
-  for (int q = 0; q < 3000; ++q) {
-    const Vec3d p =
-        q % 2 ? points[static_cast<std::size_t>(q)] : Vec3d(coord(rng), coord(rng), coord(rng));
-    for (double r : {0.0, 0.5 * radius, radius, 2.5 * radius}) {
-      hash->find_within(p, r, a);
-      vdb->find_within(p, r, b);
-      ASSERT_EQ(a, b) << "query " << q << " radius " << r;
-      total += a.size();
-    }
-  }
-  EXPECT_GT(total, 10000u);
-  EXPECT_TRUE(std::is_sorted(b.begin(), b.end()));
-  // Far from the origin (index coordinates in the millions) and with an empty point set.
-  std::vector<Vec3d> far(points.begin(), points.begin() + 1000);
-  for (Vec3d& p : far) p += Vec3d(1e4, -2e4, 3e4);
-  const auto hash_far = make_hash_point_index(far, radius);
-  const auto vdb_far = make_vdb_point_index(far, radius);
-  for (std::size_t q = 0; q < far.size(); ++q) {
-    hash_far->find_within(far[q], 4 * radius, a);
-    vdb_far->find_within(far[q], 4 * radius, b);
-    ASSERT_EQ(a, b) << "far query " << q;
-  }
-  make_vdb_point_index({}, radius)->find_within({0, 0, 0}, 1.0, b);
-  EXPECT_TRUE(b.empty());
-}
-
-TEST(VdbPointIndex, ConcurrentQueriesAgreeWithSerialOnes) {
-  std::mt19937 rng(11);
-  std::uniform_real_distribution<double> coord(0.0, 1.0);
-  std::vector<Vec3d> points(50000);
-  for (Vec3d& p : points) p = {coord(rng), coord(rng), coord(rng)};
-  const auto vdb = make_vdb_point_index(points, 0.02);
-  const std::size_t n = 4000;
-  std::vector<std::vector<std::uint32_t>> serial(n), parallel(n);
-  for (std::size_t q = 0; q < n; ++q) vdb->find_within(points[q], 0.02, serial[q]);
-  tbb::task_arena arena(4);
-  arena.execute([&] {
-    tbb::parallel_for(std::size_t{0}, n,
-                      [&](std::size_t q) { vdb->find_within(points[q], 0.02, parallel[q]); });
-  });
-  EXPECT_EQ(serial, parallel);
-}
-
-// --- traces on OpenVDB fields ------------------------------------------------------------------
 
 TEST(TraceVdb, CubeLikeThePaperEndsAtTheCentre) {
   const SurfaceMesh& box = shape("box", 1);  // 2x2 quads per face: 26 vertices
@@ -289,14 +227,110 @@ TEST(TraceVdb, SameBytesForOneTwoAndEightThreads) {
   }
 }
 
-TEST(TraceVdb, VdbPointIndexGivesTheHashGridsResult) {
-  for (const char* name : {"horn", "star", "bowl"}) {
-    const SurfaceMesh& mesh = shape(name);
-    const Fields& f = fields_of(name, mesh, 128);
-    const TraceResult hash = trace_paths(mesh, f, TraceOptions{}, make_hash_point_index);
-    const TraceResult vdb = trace_paths(mesh, f, TraceOptions{}, make_vdb_point_index);
-    EXPECT_GT(count(hash, StopReason::kMerge), 0u) << name;
-    expect_identical(hash, vdb, name);
+// --- merges against a brute-force reference ----------------------------------------------------
+
+/// Direction of trace v at its sample i as merges.h defines it: towards the next sample, at the
+/// last sample from the one before, zero for a single-sample trace.
+Vec3d direction_at(const TraceResult& r, std::size_t v, std::size_t i) {
+  const std::size_t n = r.num_samples(v);
+  if (n < 2) return {};
+  return i + 1 < n ? normalized(r.sample(v, i + 1) - r.sample(v, i))
+                   : normalized(r.sample(v, i) - r.sample(v, i - 1));
+}
+
+/// merges.h's rule over every pair of samples: each trace of `which` ends at its first sample
+/// within the point size of an eligible sample of another trace of `indexed` that did not start
+/// within the point size of it and runs at more than the merge angle to it; the partner is the
+/// nearest, ties to the smallest (trace, sample). Bounding boxes of blocks of 8 samples only skip
+/// samples farther than the point size.
+void brute_force_merges(TraceResult& r, const std::vector<std::uint32_t>& which,
+                        const std::vector<std::uint32_t>& indexed) {
+  const double ps = r.parameters.point_size;
+  constexpr std::uint32_t kBlock = 8;
+  struct Block {
+    std::uint32_t trace, first, last;
+    Vec3d lo, hi;
+  };
+  std::vector<Block> blocks;  // ascending (trace, sample)
+  for (const std::uint32_t k : indexed) {
+    std::uint32_t eligible = 0;
+    while (eligible <= r.end[k] && r.end_arc(k) - r.arc_length[r.offsets[k] + eligible] >= 2.0 * ps)
+      ++eligible;
+    for (std::uint32_t first = 0; first < eligible; first += kBlock) {
+      Block b{k, first, std::min(first + kBlock, eligible) - 1, r.sample(k, first),
+              r.sample(k, first)};
+      for (std::uint32_t m = b.first; m <= b.last; ++m)
+        for (int a = 0; a < 3; ++a) {
+          b.lo[a] = std::min(b.lo[a], r.sample(k, m)[a]);
+          b.hi[a] = std::max(b.hi[a], r.sample(k, m)[a]);
+        }
+      blocks.push_back(b);
+    }
+  }
+  std::vector<std::uint32_t> new_end(r.num_traces());
+  std::vector<std::int64_t> partner(r.num_traces(), -1);
+  for (const std::uint32_t j : which) {
+    for (std::uint32_t i = 0; i <= r.end[j] && partner[j] < 0; ++i) {
+      const Vec3d& q = r.sample(j, i);
+      const Vec3d dj = direction_at(r, j, i);
+      double best = std::numeric_limits<double>::infinity();
+      for (const Block& b : blocks) {
+        bool near = true;
+        for (int a = 0; a < 3; ++a) near = near && q[a] >= b.lo[a] - ps && q[a] <= b.hi[a] + ps;
+        if (!near || b.trace == j || distance(r.sample(j, 0), r.sample(b.trace, 0)) < ps) continue;
+        for (std::uint32_t m = b.first; m <= b.last; ++m) {
+          const double d = distance(q, r.sample(b.trace, m));
+          if (d > ps || dot(dj, direction_at(r, b.trace, m)) > r.parameters.cos_merge) continue;
+          if (d < best) {
+            best = d;
+            partner[j] = b.trace;
+            new_end[j] = i;
+          }
+        }
+      }
+    }
+  }
+  for (const std::uint32_t j : which)
+    if (partner[j] >= 0) {
+      r.end[j] = new_end[j];
+      r.stop[j] = StopReason::kMerge;
+      r.merged_with[j] = partner[j];
+    }
+}
+
+TEST(TraceVdb, MergesAreThoseOfABruteForceSearch) {
+  // Coarse shapes (merges at junctions), a fine box (neighbours start side by side, Fig. 3's
+  // junctions along its medial surface) and a finer sphere (every trace converges on the centre).
+  struct Case {
+    const char* name;
+    int detail, resolution;
+  };
+  for (const Case& c : {Case{"horn", 1, 128}, Case{"star", 1, 128}, Case{"bowl", 1, 128},
+                        Case{"propeller", 2, 128}, Case{"box", 14, 40}, Case{"sphere", 2, 48}}) {
+    const SurfaceMesh& mesh = shape(c.name, c.detail);
+    const std::string key = std::string(c.name) + std::to_string(c.detail);
+    const TraceResult r = trace_paths(mesh, fields_of(key, mesh, c.resolution), TraceOptions{});
+    // The traces before any merge: every trace keeps its samples past where a merge ended it.
+    TraceResult ref = r;
+    std::vector<std::uint32_t> non_planar, planar, all;
+    for (std::uint32_t v = 0; v < ref.num_traces(); ++v) {
+      ref.end[v] = static_cast<std::uint32_t>(ref.num_samples(v) - 1);
+      ref.merged_with[v] = -1;
+      (ref.planar[v] ? planar : non_planar).push_back(v);
+      all.push_back(v);
+    }
+    brute_force_merges(ref, non_planar, non_planar);
+    brute_force_merges(ref, planar, all);
+    std::size_t merged = 0;
+    for (std::size_t v = 0; v < r.num_traces(); ++v) {
+      ASSERT_EQ(r.merged_with[v], ref.merged_with[v]) << key << " trace " << v;
+      ASSERT_EQ(r.end[v], ref.end[v]) << key << " trace " << v;
+      ASSERT_EQ(r.stop[v] == StopReason::kMerge, ref.merged_with[v] >= 0) << key << " " << v;
+      merged += ref.merged_with[v] >= 0;
+    }
+    if (std::string(c.name) != "sphere") {
+      EXPECT_GT(merged, 0u) << key;
+    }
   }
 }
 

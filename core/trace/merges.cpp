@@ -1,0 +1,433 @@
+// merges.cpp — merge resolution over a direction-binned grid of trace samples; see merges.h.
+#include "core/trace/merges.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+
+#include "core/base/parallel.h"
+
+namespace vdb_shell {
+namespace {
+
+// Direction bins: a cube map with kFaceBins x kFaceBins bins per face, and one bin for samples
+// without a direction (a single-sample trace).
+constexpr int kFaceBins = 8;
+constexpr int kDirectedBins = 6 * kFaceBins * kFaceBins;
+constexpr std::uint32_t kUndirected = kDirectedBins;
+constexpr int kBinBits = 9;  // kDirectedBins + 1 <= 2^kBinBits
+constexpr int kAxisBits = 18;
+constexpr std::int64_t kAxisCells = std::int64_t(1) << kAxisBits;
+// Safety margin of the bins' angular bounds (radians): covers acos rounding and a sample that
+// rounding placed in the bin next to its own.
+constexpr double kAngleMargin = 1e-6;
+
+/// Direction of trace v at its sample i (unit, or zero for a single-sample trace).
+Vec3d sample_direction(const TraceResult& r, std::size_t v, std::size_t i) {
+  const std::size_t n = r.num_samples(v);
+  if (n < 2) return {};
+  return i + 1 < n ? normalized(r.sample(v, i + 1) - r.sample(v, i))
+                   : normalized(r.sample(v, i) - r.sample(v, i - 1));
+}
+
+/// The direction on the cube-map face `face` (axis face / 2, negative when odd) at face
+/// coordinates (u, v) in [-1, 1]^2.
+Vec3d face_direction(int face, double u, double v) {
+  const double s = face % 2 ? -1.0 : 1.0;
+  switch (face / 2) {
+    case 0:
+      return {s, u, v};
+    case 1:
+      return {v, s, u};
+    default:
+      return {u, v, s};
+  }
+}
+
+std::uint32_t direction_bin(const Vec3d& d) {
+  const double ax = std::fabs(d.x), ay = std::fabs(d.y), az = std::fabs(d.z);
+  if (!(ax + ay + az > 0.0)) return kUndirected;
+  int axis;
+  double m, u, v;
+  if (ax >= ay && ax >= az) {
+    axis = 0, m = d.x, u = d.y, v = d.z;
+  } else if (ay >= az) {
+    axis = 1, m = d.y, u = d.z, v = d.x;
+  } else {
+    axis = 2, m = d.z, u = d.x, v = d.y;
+  }
+  const double s = 1.0 / std::fabs(m);
+  auto cell = [](double t) {
+    return std::clamp(static_cast<int>((t + 1.0) * 0.5 * kFaceBins), 0, kFaceBins - 1);
+  };
+  const int face = 2 * axis + (m < 0.0);
+  return static_cast<std::uint32_t>((face * kFaceBins + cell(u * s)) * kFaceBins + cell(v * s));
+}
+
+/// A set of direction bins (the undirected one included).
+struct BinMask {
+  std::array<std::uint64_t, (kDirectedBins + 1 + 63) / 64> word{};
+  void set(std::uint32_t bin) { word[bin / 64] |= std::uint64_t(1) << (bin % 64); }
+  bool has(std::uint32_t bin) const { return (word[bin / 64] >> (bin % 64)) & 1u; }
+  bool intersects(const BinMask& o) const {
+    std::uint64_t any = 0;
+    for (std::size_t i = 0; i < word.size(); ++i) any |= word[i] & o.word[i];
+    return any != 0;
+  }
+  BinMask& operator|=(const BinMask& o) {
+    for (std::size_t i = 0; i < word.size(); ++i) word[i] |= o.word[i];
+    return *this;
+  }
+};
+
+/// The bins' geometry against the merge angle.
+struct Bins {
+  /// Per directed bin: its centre direction, and the cosine above which a direction's angle to
+  /// the centre guarantees that every direction of the bin lies within the merge angle of it
+  /// (2: never).
+  std::array<Vec3d, kDirectedBins> centre;
+  std::array<double, kDirectedBins> cos_skip;
+  /// Per bin of a querying sample's direction: the bins holding a direction that may lie at the
+  /// merge angle or more from some direction of it (all bins for the undirected one).
+  std::array<BinMask, kDirectedBins + 1> may_merge;
+};
+
+Bins make_bins(double merge_angle) {
+  Bins b;
+  std::array<double, kDirectedBins> radius;
+  for (int face = 0; face < 6; ++face)
+    for (int i = 0; i < kFaceBins; ++i)
+      for (int j = 0; j < kFaceBins; ++j) {
+        const int bin = (face * kFaceBins + i) * kFaceBins + j;
+        auto at = [&](double a, double c) {
+          return normalized(
+              face_direction(face, -1.0 + 2.0 * a / kFaceBins, -1.0 + 2.0 * c / kFaceBins));
+        };
+        b.centre[bin] = at(i + 0.5, j + 0.5);
+        // The directions within an angle of the centre meet the face in an ellipse (a convex
+        // set), so the bin's farthest direction from its centre is one of its corners.
+        radius[bin] = 0;
+        for (int a = 0; a < 2; ++a)
+          for (int c = 0; c < 2; ++c)
+            radius[bin] =
+                std::max(radius[bin],
+                         std::acos(std::clamp(dot(b.centre[bin], at(i + a, j + c)), -1.0, 1.0)));
+        const double budget = merge_angle - radius[bin] - kAngleMargin;
+        b.cos_skip[bin] = budget > 0.0 ? std::cos(budget) : 2.0;
+      }
+  for (std::uint32_t q = 0; q <= kDirectedBins; ++q) {
+    b.may_merge[q].set(kUndirected);
+    for (std::uint32_t bin = 0; bin < kDirectedBins; ++bin) {
+      const bool same_way =
+          q != kUndirected && std::acos(std::clamp(dot(b.centre[q], b.centre[bin]), -1.0, 1.0)) +
+                                      radius[q] + radius[bin] + kAngleMargin <
+                                  merge_angle;
+      if (!same_way) b.may_merge[q].set(bin);
+    }
+  }
+  return b;
+}
+
+/// One eligible sample in the grid. Sorted by key = (cell, bin), then sample.
+struct Entry {
+  std::uint64_t key;
+  std::uint32_t sample;  ///< index into TraceResult::samples
+  std::uint32_t trace;
+  bool operator<(const Entry& o) const { return key != o.key ? key < o.key : sample < o.sample; }
+};
+
+/// The entries of one cell in one direction bin, and their bounding box.
+struct Group {
+  Vec3d lo, hi;
+  std::uint32_t begin = 0;  ///< the group's entries are [begin, next group's begin)
+  std::uint32_t bin = 0;
+};
+
+/// The eligible samples of some traces in cubic cells, each cell's samples grouped by direction
+/// bin; per cell, the bins found in it and in its 26 neighbours.
+class SampleGrid {
+ public:
+  SampleGrid(const TraceResult& r, const std::vector<std::uint32_t>& indexed,
+             const std::vector<std::uint32_t>& eligible, double point_size) {
+    std::vector<std::size_t> begin(indexed.size() + 1, 0);
+    for (std::size_t w = 0; w < indexed.size(); ++w) begin[w + 1] = begin[w] + eligible[w];
+    if (begin.back() == 0) return;
+    // Cells from the lowest corner of the samples; wider than the point size only where the
+    // extent needs more than kAxisBits of cell index.
+    Vec3d lo(std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+             std::numeric_limits<double>::infinity());
+    Vec3d hi = -lo;
+    for (std::size_t w = 0; w < indexed.size(); ++w)
+      for (std::uint32_t m = 0; m < eligible[w]; ++m) {
+        const Vec3d& p = r.sample(indexed[w], m);
+        for (int a = 0; a < 3; ++a) {
+          lo[a] = std::min(lo[a], p[a]);
+          hi[a] = std::max(hi[a], p[a]);
+        }
+      }
+    origin_ = lo;
+    extent_ = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+    side_ = std::max(point_size, extent_ / double(kAxisCells - 4));
+    if (!(side_ > 0.0)) side_ = 1.0;
+
+    entries_.resize(begin.back());
+    for_each_index(indexed.size(), [&](std::size_t w) {
+      const std::uint32_t k = indexed[w];
+      for (std::uint32_t m = 0; m < eligible[w]; ++m)
+        entries_[begin[w] + m] = {(key_of(cell_of(r.sample(k, m))) << kBinBits) |
+                                      direction_bin(sample_direction(r, k, m)),
+                                  r.offsets[k] + m, k};
+    });
+    parallel_sort(entries_.begin(), entries_.end());
+    local_.resize(entries_.size());
+    for_each_index(entries_.size(),
+                   [&](std::size_t e) { local_[e] = to_local(r.samples[entries_[e].sample]); });
+
+    // Groups of equal (cell, bin), cells of equal cell key.
+    std::vector<std::uint64_t> cell_keys;
+    for (std::size_t e = 0; e < entries_.size(); ++e) {
+      if (e > 0 && entries_[e].key == entries_[e - 1].key) continue;
+      const std::uint64_t cell_key = entries_[e].key >> kBinBits;
+      if (cell_keys.empty() || cell_keys.back() != cell_key) {
+        cell_keys.push_back(cell_key);
+        cell_groups_.push_back(static_cast<std::uint32_t>(groups_.size()));
+      }
+      Group g;
+      g.begin = static_cast<std::uint32_t>(e);
+      g.bin = static_cast<std::uint32_t>(entries_[e].key & ((1u << kBinBits) - 1));
+      groups_.push_back(g);
+    }
+    cell_groups_.push_back(static_cast<std::uint32_t>(groups_.size()));
+    groups_.emplace_back();
+    groups_.back().begin = static_cast<std::uint32_t>(entries_.size());
+    for_each_index(groups_.size() - 1, [&](std::size_t g) {
+      Group& group = groups_[g];
+      group.lo = group.hi = r.samples[entries_[group.begin].sample];
+      for (std::uint32_t e = group.begin + 1; e < groups_[g + 1].begin; ++e) {
+        const Vec3d& p = r.samples[entries_[e].sample];
+        for (int a = 0; a < 3; ++a) {
+          group.lo[a] = std::min(group.lo[a], p[a]);
+          group.hi[a] = std::max(group.hi[a], p[a]);
+        }
+      }
+    });
+
+    std::size_t slots = 16;
+    while (slots < 2 * cell_keys.size()) slots *= 2;
+    slot_mask_ = slots - 1;
+    slot_key_.assign(slots, kEmpty);
+    slot_cell_.assign(slots, 0);
+    for (std::size_t c = 0; c < cell_keys.size(); ++c) {
+      std::size_t s = slot_of(cell_keys[c]);
+      while (slot_key_[s] != kEmpty) s = (s + 1) & slot_mask_;
+      slot_key_[s] = cell_keys[c];
+      slot_cell_[s] = static_cast<std::uint32_t>(c);
+    }
+    own_bins_.resize(cell_keys.size());
+    for_each_index(cell_keys.size(), [&](std::size_t c) {
+      for (std::uint32_t g = cell_groups_[c]; g < cell_groups_[c + 1]; ++g)
+        own_bins_[c].set(groups_[g].bin);
+    });
+    near_bins_.resize(cell_keys.size());
+    for_each_index(cell_keys.size(), [&](std::size_t c) {
+      const std::uint64_t key = cell_keys[c];
+      const Cell centre{static_cast<std::int64_t>(key >> (2 * kAxisBits)),
+                        static_cast<std::int64_t>((key >> kAxisBits) & (kAxisCells - 1)),
+                        static_cast<std::int64_t>(key & (kAxisCells - 1))};
+      near_bins_[c] = gather_bins(centre);
+    });
+  }
+
+  bool empty() const { return entries_.empty(); }
+  const Entry& entry(std::uint32_t e) const { return entries_[e]; }
+
+  /// A position relative to the grid's corner in single precision (within a few units in the
+  /// last place of the extent of the exact difference), for a first cheap distance test.
+  struct Local {
+    float x, y, z;
+  };
+  Local to_local(const Vec3d& p) const {
+    return {static_cast<float>(p.x - origin_.x), static_cast<float>(p.y - origin_.y),
+            static_cast<float>(p.z - origin_.z)};
+  }
+  const Local& local(std::uint32_t e) const { return local_[e]; }
+  /// A squared radius for Local positions that keeps every pair of points within `radius`:
+  /// the rounding of the coordinates (half a unit in the last place of the extent each) and of
+  /// the sum of squares, with room to spare.
+  float local_radius2(double radius) const {
+    const double slack = 8.0 * extent_ * std::ldexp(1.0, -24);
+    return static_cast<float>((radius + slack) * (radius + slack) * (1.0 + 1e-5));
+  }
+
+  /// The bins of the samples in the cell of `p` and its 26 neighbours: every sample within the
+  /// cell side of `p` has one of them.
+  BinMask bins_near(const Vec3d& p) const {
+    const Cell c = cell_of(p);
+    const std::uint32_t id = in_grid(c) ? find(key_of(c)) : kNone;
+    return id != kNone ? near_bins_[id] : gather_bins(c);
+  }
+
+  /// Calls visit(group, end of its entries) for every group of the cells within `radius` (at most
+  /// the cell side) of `p` whose bin `bins` holds.
+  template <class Visit>
+  void for_each_group(const Vec3d& p, double radius, const BinMask& bins,
+                      const Visit& visit) const {
+    const Cell lo = cell_of(p - Vec3d(radius, radius, radius));
+    const Cell hi = cell_of(p + Vec3d(radius, radius, radius));
+    for (std::int64_t i = std::max<std::int64_t>(lo.i, 0); i <= std::min(hi.i, kAxisCells - 1); ++i)
+      for (std::int64_t j = std::max<std::int64_t>(lo.j, 0); j <= std::min(hi.j, kAxisCells - 1);
+           ++j)
+        for (std::int64_t k = std::max<std::int64_t>(lo.k, 0); k <= std::min(hi.k, kAxisCells - 1);
+             ++k) {
+          const std::uint32_t id = find(key_of({i, j, k}));
+          if (id == kNone || !own_bins_[id].intersects(bins)) continue;
+          for (std::uint32_t g = cell_groups_[id]; g < cell_groups_[id + 1]; ++g)
+            if (bins.has(groups_[g].bin)) visit(groups_[g], groups_[g + 1].begin);
+        }
+  }
+
+ private:
+  struct Cell {
+    std::int64_t i, j, k;
+  };
+  static constexpr std::uint64_t kEmpty = ~std::uint64_t(0);
+  static constexpr std::uint32_t kNone = ~std::uint32_t(0);
+
+  /// The cell holding `p`, clamped to one cell beyond the grid on each side (points there or
+  /// farther have no samples near them).
+  Cell cell_of(const Vec3d& p) const {
+    auto axis = [&](int d) {
+      const double t = std::floor((p[d] - origin_[d]) / side_);
+      return static_cast<std::int64_t>(std::clamp(t, -1.0, double(kAxisCells)));
+    };
+    return {axis(0), axis(1), axis(2)};
+  }
+  static bool in_grid(const Cell& c) {
+    return c.i >= 0 && c.j >= 0 && c.k >= 0 && c.i < kAxisCells && c.j < kAxisCells &&
+           c.k < kAxisCells;
+  }
+  static std::uint64_t key_of(const Cell& c) {
+    return (std::uint64_t(c.i) << (2 * kAxisBits)) | (std::uint64_t(c.j) << kAxisBits) |
+           std::uint64_t(c.k);
+  }
+  std::size_t slot_of(std::uint64_t key) const {
+    return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> 20) & slot_mask_;
+  }
+  std::uint32_t find(std::uint64_t key) const {
+    std::size_t s = slot_of(key);
+    while (slot_key_[s] != kEmpty && slot_key_[s] != key) s = (s + 1) & slot_mask_;
+    return slot_key_[s] == kEmpty ? kNone : slot_cell_[s];
+  }
+  BinMask gather_bins(const Cell& c) const {
+    BinMask bins;
+    for (std::int64_t i = std::max<std::int64_t>(c.i - 1, 0);
+         i <= std::min(c.i + 1, kAxisCells - 1); ++i)
+      for (std::int64_t j = std::max<std::int64_t>(c.j - 1, 0);
+           j <= std::min(c.j + 1, kAxisCells - 1); ++j)
+        for (std::int64_t k = std::max<std::int64_t>(c.k - 1, 0);
+             k <= std::min(c.k + 1, kAxisCells - 1); ++k) {
+          const std::uint32_t id = find(key_of({i, j, k}));
+          if (id != kNone) bins |= own_bins_[id];
+        }
+    return bins;
+  }
+
+  Vec3d origin_;
+  double extent_ = 0;  ///< largest side of the samples' bounding box
+  double side_ = 1.0;
+  std::vector<Entry> entries_;
+  std::vector<Local> local_;                ///< per entry
+  std::vector<Group> groups_;               ///< ascending (cell, bin); one more marks the end
+  std::vector<std::uint32_t> cell_groups_;  ///< cell c's groups: [cell_groups_[c], [c + 1])
+  std::vector<BinMask> own_bins_;           ///< per cell: the bins of its groups
+  std::vector<BinMask> near_bins_;          ///< per cell: the bins of it and its 26 neighbours
+  std::size_t slot_mask_ = 0;
+  std::vector<std::uint64_t> slot_key_;  ///< open addressing: cell key per slot, or kEmpty
+  std::vector<std::uint32_t> slot_cell_;
+};
+
+}  // namespace
+
+void resolve_merges(TraceResult& r, const std::vector<std::uint32_t>& which,
+                    const std::vector<std::uint32_t>& indexed) {
+  const double ps = r.parameters.point_size;
+  const double ps2 = ps * ps;
+  const double cos_merge = r.parameters.cos_merge;
+  const Bins bins = make_bins(std::acos(std::clamp(cos_merge, -1.0, 1.0)));
+
+  // Arc length grows along a trace, so the eligible samples are a prefix.
+  std::vector<std::uint32_t> eligible(indexed.size());
+  for_each_index(indexed.size(), [&](std::size_t w) {
+    const std::uint32_t k = indexed[w];
+    std::uint32_t m = 0;
+    while (m <= r.end[k] && !(r.end_arc(k) - r.arc_length[r.offsets[k] + m] < 2.0 * ps)) ++m;
+    eligible[w] = m;
+  });
+  const SampleGrid grid(r, indexed, eligible, ps);
+  if (grid.empty()) return;
+  const float ps2_local = grid.local_radius2(ps);
+
+  std::vector<std::uint32_t> new_end(which.size());
+  std::vector<std::int64_t> partner(which.size(), -1);
+  for_each_chunk(which.size(), [&](std::size_t begin, std::size_t end) {
+    for (std::size_t w = begin; w < end; ++w) {
+      const std::uint32_t j = which[w];
+      new_end[w] = r.end[j];
+      const Vec3d& pj = r.sample(j, 0);
+      for (std::uint32_t i = 0; i <= r.end[j] && partner[w] < 0; ++i) {
+        const Vec3d& q = r.sample(j, i);
+        const Vec3d dir = sample_direction(r, j, i);
+        // The bins that may hold a sample this one can merge with, and are found near it.
+        const BinMask& may_merge = bins.may_merge[direction_bin(dir)];
+        if (!grid.bins_near(q).intersects(may_merge)) continue;
+        const bool directed = norm2(dir) > 0.0;
+        double best = std::numeric_limits<double>::infinity();
+        std::uint32_t best_sample = 0;
+        const SampleGrid::Local ql = grid.to_local(q);
+        grid.for_each_group(q, ps, may_merge, [&](const Group& g, std::uint32_t group_end) {
+          // Every direction of the bin within the merge angle of this sample's.
+          if (g.bin != kUndirected && directed &&
+              dot(dir, bins.centre[g.bin]) > bins.cos_skip[g.bin])
+            return;
+          double gap2 = 0;  // squared distance from q to the group's box
+          for (int a = 0; a < 3; ++a) {
+            const double t =
+                g.lo[a] > q[a] ? g.lo[a] - q[a] : (q[a] > g.hi[a] ? q[a] - g.hi[a] : 0);
+            gap2 += t * t;
+          }
+          if (gap2 > ps2) return;
+          for (std::uint32_t e = g.begin; e < group_end; ++e) {
+            const SampleGrid::Local& l = grid.local(e);
+            const float dx = l.x - ql.x, dy = l.y - ql.y, dz = l.z - ql.z;
+            if (dx * dx + dy * dy + dz * dz > ps2_local) continue;
+            const Entry& entry = grid.entry(e);
+            const Vec3d& s = r.samples[entry.sample];
+            if (norm2(s - q) > ps2) continue;
+            const std::uint32_t k = entry.trace;
+            if (k == j) continue;
+            if (dot(dir, sample_direction(r, k, entry.sample - r.offsets[k])) > cos_merge) continue;
+            if (distance(pj, r.sample(k, 0)) < ps) continue;  // started side by side
+            const double d = distance(q, s);
+            // Ties go to the smallest (trace, sample): the order of the samples' indices.
+            if (d < best || (d == best && entry.sample < best_sample)) {
+              best = d;
+              best_sample = entry.sample;
+              partner[w] = k;
+            }
+          }
+        });
+        if (partner[w] >= 0) new_end[w] = i;
+      }
+    }
+  });
+  for (std::size_t w = 0; w < which.size(); ++w) {
+    if (partner[w] < 0) continue;
+    const std::uint32_t j = which[w];
+    r.end[j] = new_end[w];
+    r.stop[j] = StopReason::kMerge;
+    r.merged_with[j] = partner[w];
+  }
+}
+
+}  // namespace vdb_shell

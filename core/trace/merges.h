@@ -1,0 +1,36 @@
+// merges.h — order-independent merge resolution (criterion 1 of trace.h; paper eq. 3, Fig. 3).
+//
+// A trace ends at its first sample (by arc length) that lies within the point size of an
+// *eligible* sample of another trace, where
+//   * a sample is eligible unless it lies within the last two point sizes of its trace (traces
+//     arriving together at a critical point end there and are welded, they do not stop short);
+//   * traces that started within the point size of each other never merge (side by side);
+//   * two samples whose directions (sample_direction) lie within the merge angle of each other
+//     never merge (traces running the same way, not a junction);
+// and its partner is the nearest such sample, ties going to the smallest (trace, sample).
+//
+// The queries run against a grid of the eligible samples: cubic cells of side the point size
+// (larger only where the samples' extent would overflow 21 bits of cell index), each cell's
+// samples grouped by a direction bin (a cube map of 6 x 8 x 8 bins). A querying run of a few
+// consecutive samples skips a whole bin when every direction in the bin lies within the merge
+// angle of every direction of the run: where thousands of traces converge on one path, or run
+// side by side down a fine mesh, the samples near a query run the same way as it and are never
+// looked at, so the work follows the crossings, not the crowd. The surviving samples are tested
+// one by one with the rule above.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "core/trace/trace.h"
+
+namespace vdb_shell {
+
+/// Ends every trace of `which` at its first merge (rule above) with an eligible sample of the
+/// `indexed` traces, given each indexed trace's current end; sets end, stop (kMerge) and
+/// merged_with of the traces that merge. `indexed` must be ascending. Parallel over `which`;
+/// the result is the same for any thread count.
+void resolve_merges(TraceResult& r, const std::vector<std::uint32_t>& which,
+                    const std::vector<std::uint32_t>& indexed);
+
+}  // namespace vdb_shell
