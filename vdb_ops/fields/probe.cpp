@@ -39,19 +39,31 @@ class VdbProbe final : public FieldProbe {
     }
     const Coord base(int(std::floor(xyz[0])), int(std::floor(xyz[1])), int(std::floor(xyz[2])));
     const openvdb::Vec3d t = xyz - base.asVec3d();
-    // phi over base + [-1, 2]^3 (only the 32 entries central differences need are read).
-    float v[4][4][4];
-    fetch_stencil(base, v);
+    // A trace asks several times in one voxel cell (RK2: its sample and the midpoint): the cell's
+    // corner differences are kept until it leaves.
+    if (!has_cell_ || base != cell_) {
+      // phi over base + [-1, 2]^3 (only the 32 entries central differences need are read).
+      float v[4][4][4];
+      fetch_stencil(base, v);
+      for (int cx = 0; cx < 2; ++cx)
+        for (int cy = 0; cy < 2; ++cy)
+          for (int cz = 0; cz < 2; ++cz) {
+            const int x = cx + 1, y = cy + 1, z = cz + 1;
+            openvdb::Vec3d& d = corner_diff_[cx][cy][cz];
+            d[0] = 0.5 * double(v[x + 1][y][z] - v[x - 1][y][z]);
+            d[1] = 0.5 * double(v[x][y + 1][z] - v[x][y - 1][z]);
+            d[2] = 0.5 * double(v[x][y][z + 1] - v[x][y][z - 1]);
+          }
+      cell_ = base;
+      has_cell_ = true;
+    }
     openvdb::Vec3d g(0.0, 0.0, 0.0);
     for (int cx = 0; cx < 2; ++cx)
       for (int cy = 0; cy < 2; ++cy)
         for (int cz = 0; cz < 2; ++cz) {
           const double w =
               (cx ? t[0] : 1.0 - t[0]) * (cy ? t[1] : 1.0 - t[1]) * (cz ? t[2] : 1.0 - t[2]);
-          const int x = cx + 1, y = cy + 1, z = cz + 1;
-          g[0] += w * 0.5 * double(v[x + 1][y][z] - v[x - 1][y][z]);
-          g[1] += w * 0.5 * double(v[x][y + 1][z] - v[x][y - 1][z]);
-          g[2] += w * 0.5 * double(v[x][y][z + 1] - v[x][y][z - 1]);
+          g += w * corner_diff_[cx][cy][cz];
         }
     const openvdb::Vec3d w = apply_map(f_.gmap.g, g);
     return {w[0], w[1], w[2]};
@@ -97,6 +109,9 @@ class VdbProbe final : public FieldProbe {
   FloatGrid::ConstAccessor sdf_acc_;
   FloatGrid::ConstAccessor flux_acc_;
   std::unique_ptr<Vec3SGrid::ConstAccessor> grad_acc_;
+  bool has_cell_ = false;
+  Coord cell_;                           ///< the voxel cell of corner_diff_
+  openvdb::Vec3d corner_diff_[2][2][2];  ///< central differences / 2 at its 8 corners
 };
 
 }  // namespace
