@@ -13,6 +13,10 @@ Sections (--sections, comma-separated; default all):
            per shape, beside the paper's Table 1 row.
   meshes   the same for the watertight meshes of --meshes (the shared README says which are
            broken; those are skipped and listed).
+  fine     meshes much finer than the grid at --table1-resolution (FINE_MESHES: a 50,880-face
+           sphere, a 40,368-face box, spot, fertility and fandisk subdivided to 94k-207k faces):
+           per-stage time, trace samples and wall microseconds per sample, stop reasons,
+           coverage (one run each unless --fine-repeats).
   scaling  fandisk and fertility x16 (fertility.off subdivided twice, 144,000 faces, written into
            OUT/work by vdb_shell_bench_fields --write-subdivided) at --resolutions: time per stage
            (the report's timings_s), peak RSS of the process (wait4 ru_maxrss), and the ratio to
@@ -61,7 +65,17 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.normpath(os.path.join(HERE, "..", ".."))
 SHARED = os.path.normpath(os.path.join(REPO, "..", "shared"))
 
-ALL_SECTIONS = ["table1", "meshes", "scaling", "threads", "peers"]
+ALL_SECTIONS = ["table1", "meshes", "fine", "scaling", "threads", "peers"]
+
+# The fine meshes of the fine section: (label, how it is made, argument, detail or levels).
+# Subdivided meshes are the shared ones midpoint-subdivided (vdb_shell_bench_fields
+# --write-subdivided; 4^levels times the faces), shapes come from vdb_shell_shapes.
+FINE_MESHES = [("sphere-d8", "shape", "sphere", 8),         # 50,880 faces
+               ("box-d29", "shape", "box", 29),             # 40,368 faces
+               ("spot_x16", "subdivided", "spot.obj", 2),  # 93,696 faces
+               ("fertility_x16", "subdivided", "fertility.off", 2),  # 144,000 faces
+               ("fandisk_x16", "subdivided", "fandisk.obj", 2)]      # 207,136 faces
+TARGET_FINE_SPHERE_S = 5.0
 
 # The paper's Table 1 ("Volumetric Shells using Path Tracing", 128^3): name, F, time s, T,
 # point size, step size. Teapot and dragon have no generated shape here.
@@ -868,6 +882,75 @@ class Suite:
         self.save()
         self.quality_check_summary("meshes")
 
+    # -- fine meshes ---------------------------------------------------------------------------
+
+    def fine_mesh(self, label, how, arg, n):
+        """Path of one FINE_MESHES entry, made in OUT/work; (path, error)."""
+        if how == "shape":
+            if "shapes" not in self.bin:
+                return None, "no vdb_shell_shapes"
+            _, path, err = self.make_shape(arg, n)
+            return path, err
+        src = os.path.join(self.args.meshes, arg)
+        path = os.path.join(self.work, label + ".obj")
+        if not os.path.exists(src):
+            return None, "%s not found" % src
+        if not os.path.exists(path):
+            if "fields_bench" not in self.bin:
+                return None, "no vdb_shell_bench_fields"
+            rec = self.runner.run([self.bin["fields_bench"], "--write-subdivided", src, path,
+                                   "--levels", n])
+            if not rec["ok"]:
+                return None, rec["error"]
+        return path, None
+
+    def section_fine(self):
+        res = self.args.table1_resolution
+        cases = []
+        self.results["sections"]["fine"] = {"resolution": res, "cases": cases}
+        for label, how, arg, n in FINE_MESHES:
+            path, err = self.fine_mesh(label, how, arg, n)
+            if path is None:
+                log("fine: %s: %s" % (label, err))
+                cases.append({"label": label, "ok": False, "error": err, "runs": []})
+                continue
+            log("fine: %s @%d x%d" % (label, res, self.args.fine_repeats))
+            case = self.shell_case(label, path, res, self.args.fine_repeats, "fine",
+                                   checker=True, verify_quality=False, keep_shell=False)
+            cases.append(case)
+            self.save()
+        self.render_fine()
+
+    def render_fine(self):
+        sec = self.results["sections"].get("fine") or {}
+        rows = []
+        for c in sec.get("cases", []):
+            if not c.get("ok"):
+                rows.append([c["label"]] + [""] * 11 + [failure_text(c)])
+                continue
+            r, t = c["report"], c["timings_median_s"]
+            samples = get(r, "trace", "samples")
+            stops = r.get("stop_reasons") or {}
+            per_sample = t["trace"] / samples * 1e6 if samples and t.get("trace") else None
+            rows.append([c["label"], fmt(get(r, "input", "faces")), len(c["wall_s_all"]),
+                         fmt(t.get("fields"), 2), fmt(t.get("trace"), 2),
+                         fmt(t.get("assemble"), 2), fmt(t.get("check"), 2),
+                         fmt(t.get("total"), 2), fmt(samples),
+                         fmt(per_sample, 2),
+                         "/".join(str(stops.get(k, "")) for k in
+                                  ("critical", "merge", "flux", "cap")),
+                         fmt(get(r, "shell", "coverage"), 3), self.checker_cells(c)[0]])
+        text = ["## Fine meshes at %s^3" % sec.get("resolution"), "",
+                "Meshes much finer than the grid (the report's timings_s, median over the runs, "
+                "all threads; us/sample: trace wall seconds per trace sample; stops: critical/"
+                "merge/flux/cap; checker: ../shared/eval/check_shell.py).", "",
+                md_table(["mesh", "F", "runs", "fields s", "trace s", "assemble s", "check s",
+                          "total s", "samples", "us/sample", "stops", "coverage", "checker"],
+                         rows)]
+        self.emit("\n".join(text))
+        self.rendered.add("fine")
+        self.save()
+
     # -- scaling meshes ------------------------------------------------------------------------
 
     def scaling_meshes(self):
@@ -1265,6 +1348,19 @@ class Suite:
             add("Table 1 shapes end-to-end at 128^3", "", "<= 0.5 s each", None,
                 "section not run")
 
+        fine = (self.results["sections"].get("fine") or {}).get("cases", [])
+        sphere = next((c for c in fine if c["label"] == "sphere-d8"), None)
+        if sphere and sphere.get("ok"):
+            tot = sphere["timings_median_s"]["total"]
+            add("50,880-face sphere at 128^3: whole run", "%.2f s (trace %.2f s)" % (
+                tot, sphere["timings_median_s"]["trace"]), "<= %.0f s" % TARGET_FINE_SPHERE_S,
+                tot <= TARGET_FINE_SPHERE_S, "%.2f s %s" % (abs(TARGET_FINE_SPHERE_S - tot),
+                                                            "to spare" if tot <= TARGET_FINE_SPHERE_S
+                                                            else "over"))
+        else:
+            add("50,880-face sphere at 128^3: whole run", failure_text(sphere) if sphere else "",
+                "<= %.0f s" % TARGET_FINE_SPHERE_S, None, "" if sphere else "fine not run")
+
         sc = (self.results["sections"].get("scaling") or {}).get("cases", [])
         at512 = [c for c in sc if c["resolution"] == 512]
         if at512:
@@ -1364,6 +1460,8 @@ def parse_args(argv):
                     help="resolution of table1, meshes and peers (default 128, also in --quick)")
     ap.add_argument("--resolutions", default=None,
                     help="scaling resolutions (default 128,256,512,1024; quick 64,128)")
+    ap.add_argument("--fine-repeats", type=int, default=None,
+                    help="runs per mesh in the fine section (default 1)")
     ap.add_argument("--scaling-repeats", type=int, default=None,
                     help="runs per scaling point (default 3; quick 1)")
     ap.add_argument("--scaling-single-above", type=int, default=512,
@@ -1406,6 +1504,7 @@ def parse_args(argv):
     q = a.quick
     a.repeats = a.repeats or (1 if q else 5)
     a.scaling_repeats = a.scaling_repeats or (1 if q else 3)
+    a.fine_repeats = a.fine_repeats or 1
     a.thread_repeats = a.thread_repeats or (1 if q else 3)
     a.thread_resolution = a.thread_resolution or (128 if q else 512)
     a.resolutions = [int(x) for x in (a.resolutions or ("64,128" if q else "128,256,512,1024"))
