@@ -57,12 +57,12 @@ void pack_traces(const std::vector<OneTrace>& rows, TraceResult& r) {
   r.end.resize(n);
   r.stop.resize(n);
   r.merged_with.assign(n, -1);
-  for (std::size_t v = 0; v < n; ++v) {
+  for_each_index(n, [&](std::size_t v) {
     std::copy(rows[v].samples.begin(), rows[v].samples.end(), r.samples.begin() + r.offsets[v]);
     std::copy(rows[v].arc.begin(), rows[v].arc.end(), r.arc_length.begin() + r.offsets[v]);
     r.end[v] = static_cast<std::uint32_t>(rows[v].samples.size() - 1);
     r.stop[v] = rows[v].stop;
-  }
+  });
 }
 
 void trace_one(FieldProbe& probe, const Vec3d& p, bool planar, const TraceOptions& opt,
