@@ -81,7 +81,51 @@ struct BinMask {
   }
 };
 
-/// The bins' geometry against the merge angle.
+/// The bins' geometry, the same for every run: computed once.
+struct BinGeometry {
+  std::array<Vec3d, kDirectedBins> centre;
+  /// Per bin: the largest angle between its centre and a direction in it (radians).
+  std::array<double, kDirectedBins> radius;
+  /// Per pair of bins: the largest angle between a direction of one and one of the other, at
+  /// most pi (radians).
+  std::vector<float> widest;  ///< [a * kDirectedBins + b], rounded up to float
+};
+
+const BinGeometry& bin_geometry() {
+  static const BinGeometry geometry = [] {
+    BinGeometry g;
+    for (int face = 0; face < 6; ++face)
+      for (int i = 0; i < kFaceBins; ++i)
+        for (int j = 0; j < kFaceBins; ++j) {
+          const int bin = (face * kFaceBins + i) * kFaceBins + j;
+          auto at = [&](double a, double c) {
+            return normalized(
+                face_direction(face, -1.0 + 2.0 * a / kFaceBins, -1.0 + 2.0 * c / kFaceBins));
+          };
+          g.centre[bin] = at(i + 0.5, j + 0.5);
+          // The directions within an angle of the centre meet the face in an ellipse (a convex
+          // set), so the bin's farthest direction from its centre is one of its corners.
+          g.radius[bin] = 0;
+          for (int a = 0; a < 2; ++a)
+            for (int c = 0; c < 2; ++c)
+              g.radius[bin] =
+                  std::max(g.radius[bin],
+                           std::acos(std::clamp(dot(g.centre[bin], at(i + a, j + c)), -1.0, 1.0)));
+        }
+    g.widest.resize(std::size_t(kDirectedBins) * kDirectedBins);
+    for (int a = 0; a < kDirectedBins; ++a)
+      for (int b = 0; b < kDirectedBins; ++b) {
+        const double widest = std::acos(std::clamp(dot(g.centre[a], g.centre[b]), -1.0, 1.0)) +
+                              g.radius[a] + g.radius[b] + kAngleMargin;
+        g.widest[std::size_t(a) * kDirectedBins + b] =
+            std::nextafter(static_cast<float>(std::min(widest, kPi)), 4.0f);
+      }
+    return g;
+  }();
+  return geometry;
+}
+
+/// The bins against the merge angle.
 struct Bins {
   /// Per directed bin: its centre direction, and the cosine above which a direction's angle to
   /// the centre guarantees that every direction of the bin lies within the merge angle of it
@@ -94,35 +138,19 @@ struct Bins {
 };
 
 Bins make_bins(double merge_angle) {
+  const BinGeometry& g = bin_geometry();
   Bins b;
-  std::array<double, kDirectedBins> radius;
-  for (int face = 0; face < 6; ++face)
-    for (int i = 0; i < kFaceBins; ++i)
-      for (int j = 0; j < kFaceBins; ++j) {
-        const int bin = (face * kFaceBins + i) * kFaceBins + j;
-        auto at = [&](double a, double c) {
-          return normalized(
-              face_direction(face, -1.0 + 2.0 * a / kFaceBins, -1.0 + 2.0 * c / kFaceBins));
-        };
-        b.centre[bin] = at(i + 0.5, j + 0.5);
-        // The directions within an angle of the centre meet the face in an ellipse (a convex
-        // set), so the bin's farthest direction from its centre is one of its corners.
-        radius[bin] = 0;
-        for (int a = 0; a < 2; ++a)
-          for (int c = 0; c < 2; ++c)
-            radius[bin] =
-                std::max(radius[bin],
-                         std::acos(std::clamp(dot(b.centre[bin], at(i + a, j + c)), -1.0, 1.0)));
-        const double budget = merge_angle - radius[bin] - kAngleMargin;
-        b.cos_skip[bin] = budget > 0.0 ? std::cos(budget) : 2.0;
-      }
+  b.centre = g.centre;
+  for (int bin = 0; bin < kDirectedBins; ++bin) {
+    const double budget = merge_angle - g.radius[bin] - kAngleMargin;
+    b.cos_skip[bin] = budget > 0.0 ? std::cos(budget) : 2.0;
+  }
   for (std::uint32_t q = 0; q <= kDirectedBins; ++q) {
     b.may_merge[q].set(kUndirected);
     for (std::uint32_t bin = 0; bin < kDirectedBins; ++bin) {
+      // Every direction of bin q within the merge angle of every direction of `bin`.
       const bool same_way =
-          q != kUndirected && std::acos(std::clamp(dot(b.centre[q], b.centre[bin]), -1.0, 1.0)) +
-                                      radius[q] + radius[bin] + kAngleMargin <
-                                  merge_angle;
+          q != kUndirected && double(g.widest[std::size_t(q) * kDirectedBins + bin]) < merge_angle;
       if (!same_way) b.may_merge[q].set(bin);
     }
   }
@@ -145,9 +173,13 @@ struct Group {
 };
 
 /// The eligible samples of some traces in cubic cells, each cell's samples grouped by direction
-/// bin; per cell, the bins found in it and in its 26 neighbours.
+/// bin.
 class SampleGrid {
  public:
+  struct Cell {
+    std::int64_t i, j, k;
+  };
+
   SampleGrid(const TraceResult& r, const std::vector<std::uint32_t>& indexed,
              const std::vector<std::uint32_t>& eligible, double point_size) {
     std::vector<std::size_t> begin(indexed.size() + 1, 0);
@@ -229,14 +261,6 @@ class SampleGrid {
       for (std::uint32_t g = cell_groups_[c]; g < cell_groups_[c + 1]; ++g)
         own_bins_[c].set(groups_[g].bin);
     });
-    near_bins_.resize(cell_keys.size());
-    for_each_index(cell_keys.size(), [&](std::size_t c) {
-      const std::uint64_t key = cell_keys[c];
-      const Cell centre{static_cast<std::int64_t>(key >> (2 * kAxisBits)),
-                        static_cast<std::int64_t>((key >> kAxisBits) & (kAxisCells - 1)),
-                        static_cast<std::int64_t>(key & (kAxisCells - 1))};
-      near_bins_[c] = gather_bins(centre);
-    });
   }
 
   bool empty() const { return entries_.empty(); }
@@ -260,12 +284,35 @@ class SampleGrid {
     return static_cast<float>((radius + slack) * (radius + slack) * (1.0 + 1e-5));
   }
 
+  /// Remembers bins_near() for the cells a thread asked about last: consecutive samples of a
+  /// trace, and neighbouring traces, mostly ask about the same cells.
+  class NearCache {
+   public:
+    NearCache() : slots_(kSlots) {}
+
+   private:
+    friend class SampleGrid;
+    static constexpr std::size_t kSlots = 1024;  // a power of two
+    struct Slot {
+      std::uint64_t key = kEmpty;
+      BinMask bins;
+    };
+    std::vector<Slot> slots_;
+  };
+
   /// The bins of the samples in the cell of `p` and its 26 neighbours: every sample within the
   /// cell side of `p` has one of them.
-  BinMask bins_near(const Vec3d& p) const {
+  const BinMask& bins_near(const Vec3d& p, NearCache& cache) const {
     const Cell c = cell_of(p);
-    const std::uint32_t id = in_grid(c) ? find(key_of(c)) : kNone;
-    return id != kNone ? near_bins_[id] : gather_bins(c);
+    // Indices from -1 to kAxisCells: 20 bits each once shifted by one.
+    const std::uint64_t key =
+        (std::uint64_t(c.i + 1) << 40) | (std::uint64_t(c.j + 1) << 20) | std::uint64_t(c.k + 1);
+    NearCache::Slot& slot = cache.slots_[slot_of(key) & (NearCache::kSlots - 1)];
+    if (slot.key != key) {
+      slot.key = key;
+      slot.bins = gather_bins(c);
+    }
+    return slot.bins;
   }
 
   /// Calls visit(group, end of its entries) for every group of the cells within `radius` (at most
@@ -288,9 +335,6 @@ class SampleGrid {
   }
 
  private:
-  struct Cell {
-    std::int64_t i, j, k;
-  };
   static constexpr std::uint64_t kEmpty = ~std::uint64_t(0);
   static constexpr std::uint32_t kNone = ~std::uint32_t(0);
 
@@ -341,7 +385,6 @@ class SampleGrid {
   std::vector<Group> groups_;               ///< ascending (cell, bin); one more marks the end
   std::vector<std::uint32_t> cell_groups_;  ///< cell c's groups: [cell_groups_[c], [c + 1])
   std::vector<BinMask> own_bins_;           ///< per cell: the bins of its groups
-  std::vector<BinMask> near_bins_;          ///< per cell: the bins of it and its 26 neighbours
   std::size_t slot_mask_ = 0;
   std::vector<std::uint64_t> slot_key_;  ///< open addressing: cell key per slot, or kEmpty
   std::vector<std::uint32_t> slot_cell_;
@@ -371,6 +414,7 @@ void resolve_merges(TraceResult& r, const std::vector<std::uint32_t>& which,
   std::vector<std::uint32_t> new_end(which.size());
   std::vector<std::int64_t> partner(which.size(), -1);
   for_each_chunk(which.size(), [&](std::size_t begin, std::size_t end) {
+    SampleGrid::NearCache near;
     for (std::size_t w = begin; w < end; ++w) {
       const std::uint32_t j = which[w];
       new_end[w] = r.end[j];
@@ -380,7 +424,7 @@ void resolve_merges(TraceResult& r, const std::vector<std::uint32_t>& which,
         const Vec3d dir = sample_direction(r, j, i);
         // The bins that may hold a sample this one can merge with, and are found near it.
         const BinMask& may_merge = bins.may_merge[direction_bin(dir)];
-        if (!grid.bins_near(q).intersects(may_merge)) continue;
+        if (!grid.bins_near(q, near).intersects(may_merge)) continue;
         const bool directed = norm2(dir) > 0.0;
         double best = std::numeric_limits<double>::infinity();
         std::uint32_t best_sample = 0;
