@@ -10,13 +10,15 @@
 // and its partner is the nearest such sample, ties going to the smallest (trace, sample).
 //
 // The queries run against a grid of the eligible samples: cubic cells of side the point size
-// (larger only where the samples' extent would overflow 21 bits of cell index), each cell's
-// samples grouped by a direction bin (a cube map of 6 x 8 x 8 bins). A querying run of a few
-// consecutive samples skips a whole bin when every direction in the bin lies within the merge
-// angle of every direction of the run: where thousands of traces converge on one path, or run
-// side by side down a fine mesh, the samples near a query run the same way as it and are never
-// looked at, so the work follows the crossings, not the crowd. The surviving samples are tested
-// one by one with the rule above.
+// (larger only where the samples' extent would overflow 18 bits of cell index), each cell's
+// samples grouped by direction bin (a cube map of 6 x 8 x 8 bins) with the group's bounding box.
+// A querying sample first asks which bins occur in its cell and the 26 around it (cached per
+// thread): when none of them can hold a direction at the merge angle from its own, it is done.
+// Otherwise it visits only the groups within the point size whose bin is not entirely within the
+// merge angle of its direction, and tests their samples one by one with the rule above. Where
+// thousands of traces converge on one path, or run side by side down a fine mesh, the samples
+// near a query run its own way and are never read, so the work follows the crossings, not the
+// crowd.
 #pragma once
 
 #include <cstdint>
