@@ -172,6 +172,47 @@ struct Group {
   std::uint32_t bin = 0;
 };
 
+/// Open addressing from cell keys to dense indices (insertion order).
+class CellTable {
+ public:
+  static constexpr std::uint32_t kNone = ~std::uint32_t(0);
+
+  /// A table for up to `n` keys.
+  explicit CellTable(std::size_t n = 0) {
+    std::size_t slots = 16;
+    while (slots < 2 * n) slots *= 2;
+    mask_ = slots - 1;
+    key_.assign(slots, kEmpty);
+    index_.assign(slots, kNone);
+  }
+  /// The index of `key`, given the next free index if it is new.
+  std::uint32_t insert(std::uint64_t key) {
+    std::size_t s = slot_of(key);
+    while (key_[s] != kEmpty && key_[s] != key) s = (s + 1) & mask_;
+    if (key_[s] == kEmpty) {
+      key_[s] = key;
+      index_[s] = size_++;
+    }
+    return index_[s];
+  }
+  std::uint32_t find(std::uint64_t key) const {
+    std::size_t s = slot_of(key);
+    while (key_[s] != kEmpty && key_[s] != key) s = (s + 1) & mask_;
+    return index_[s];  // kNone at an empty slot
+  }
+  std::uint32_t size() const { return size_; }
+
+ private:
+  static constexpr std::uint64_t kEmpty = ~std::uint64_t(0);
+  std::size_t slot_of(std::uint64_t key) const {
+    return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> 20) & mask_;
+  }
+  std::size_t mask_ = 0;
+  std::uint32_t size_ = 0;
+  std::vector<std::uint64_t> key_;
+  std::vector<std::uint32_t> index_;
+};
+
 /// The eligible samples of some traces in cubic cells, each cell's samples grouped by direction
 /// bin.
 class SampleGrid {
@@ -245,21 +286,38 @@ class SampleGrid {
       }
     });
 
-    std::size_t slots = 16;
-    while (slots < 2 * cell_keys.size()) slots *= 2;
-    slot_mask_ = slots - 1;
-    slot_key_.assign(slots, kEmpty);
-    slot_cell_.assign(slots, 0);
-    for (std::size_t c = 0; c < cell_keys.size(); ++c) {
-      std::size_t s = slot_of(cell_keys[c]);
-      while (slot_key_[s] != kEmpty) s = (s + 1) & slot_mask_;
-      slot_key_[s] = cell_keys[c];
-      slot_cell_[s] = static_cast<std::uint32_t>(c);
-    }
+    cells_ = CellTable(cell_keys.size());
+    for (const std::uint64_t key : cell_keys) cells_.insert(key);
     own_bins_.resize(cell_keys.size());
     for_each_index(cell_keys.size(), [&](std::size_t c) {
       for (std::uint32_t g = cell_groups_[c]; g < cell_groups_[c + 1]; ++g)
         own_bins_[c].set(groups_[g].bin);
+    });
+
+    // Blocks of 2 x 2 x 2 cells: the bins of each block and of the 26 blocks around it.
+    blocks_ = CellTable(cell_keys.size());
+    for (std::size_t c = 0; c < cell_keys.size(); ++c) {
+      const Cell cell = cell_of_key(cell_keys[c]);
+      const std::uint32_t b = blocks_.insert(key_of({cell.i / 2, cell.j / 2, cell.k / 2}));
+      if (b == block_bins_.size()) block_bins_.emplace_back();
+      block_bins_[b] |= own_bins_[c];
+    }
+    block_keys_.resize(blocks_.size());
+    for (std::size_t c = 0; c < cell_keys.size(); ++c) {
+      const Cell cell = cell_of_key(cell_keys[c]);
+      const std::uint64_t key = key_of({cell.i / 2, cell.j / 2, cell.k / 2});
+      block_keys_[blocks_.find(key)] = key;
+    }
+    near_block_bins_.resize(blocks_.size());
+    for_each_index(blocks_.size(), [&](std::size_t b) {
+      const Cell centre = cell_of_key(block_keys_[b]);
+      BinMask& near = near_block_bins_[b];
+      for (std::int64_t i = std::max<std::int64_t>(centre.i - 1, 0); i <= centre.i + 1; ++i)
+        for (std::int64_t j = std::max<std::int64_t>(centre.j - 1, 0); j <= centre.j + 1; ++j)
+          for (std::int64_t k = std::max<std::int64_t>(centre.k - 1, 0); k <= centre.k + 1; ++k) {
+            const std::uint32_t other = blocks_.find(key_of({i, j, k}));
+            if (other != CellTable::kNone) near |= block_bins_[other];
+          }
     });
   }
 
@@ -284,35 +342,34 @@ class SampleGrid {
     return static_cast<float>((radius + slack) * (radius + slack) * (1.0 + 1e-5));
   }
 
-  /// Remembers bins_near() for the cells a thread asked about last: consecutive samples of a
-  /// trace, and neighbouring traces, mostly ask about the same cells.
-  class NearCache {
-   public:
-    NearCache() : slots_(kSlots) {}
-
-   private:
-    friend class SampleGrid;
-    static constexpr std::size_t kSlots = 1024;  // a power of two
-    struct Slot {
-      std::uint64_t key = kEmpty;
-      BinMask bins;
-    };
-    std::vector<Slot> slots_;
+  /// The bins of the samples in the block of 2 x 2 x 2 cells holding `p` and in the 26 blocks
+  /// around it: every sample within the cell side of `p` has one of them. `last` keeps the
+  /// answer for the block asked about last (consecutive samples of a trace mostly share one).
+  struct NearBins {
+    Cell block{-2, -2, -2};
+    BinMask bins;
   };
-
-  /// The bins of the samples in the cell of `p` and its 26 neighbours: every sample within the
-  /// cell side of `p` has one of them.
-  const BinMask& bins_near(const Vec3d& p, NearCache& cache) const {
+  const BinMask& bins_near(const Vec3d& p, NearBins& last) const {
     const Cell c = cell_of(p);
-    // Indices from -1 to kAxisCells: 20 bits each once shifted by one.
-    const std::uint64_t key =
-        (std::uint64_t(c.i + 1) << 40) | (std::uint64_t(c.j + 1) << 20) | std::uint64_t(c.k + 1);
-    NearCache::Slot& slot = cache.slots_[slot_of(key) & (NearCache::kSlots - 1)];
-    if (slot.key != key) {
-      slot.key = key;
-      slot.bins = gather_bins(c);
+    auto half = [](std::int64_t i) { return i >= 0 ? i / 2 : -1; };
+    const Cell block{half(c.i), half(c.j), half(c.k)};
+    if (block.i == last.block.i && block.j == last.block.j && block.k == last.block.k)
+      return last.bins;
+    last.block = block;
+    const std::uint32_t b = in_grid(block) ? blocks_.find(key_of(block)) : CellTable::kNone;
+    if (b != CellTable::kNone) {
+      last.bins = near_block_bins_[b];
+    } else {  // no samples in the block itself: its neighbours' bins
+      last.bins = BinMask();
+      for (std::int64_t i = std::max<std::int64_t>(block.i - 1, 0); i <= block.i + 1; ++i)
+        for (std::int64_t j = std::max<std::int64_t>(block.j - 1, 0); j <= block.j + 1; ++j)
+          for (std::int64_t k = std::max<std::int64_t>(block.k - 1, 0); k <= block.k + 1; ++k) {
+            const std::uint32_t other =
+                in_grid({i, j, k}) ? blocks_.find(key_of({i, j, k})) : CellTable::kNone;
+            if (other != CellTable::kNone) last.bins |= block_bins_[other];
+          }
     }
-    return slot.bins;
+    return last.bins;
   }
 
   /// Calls visit(group, end of its entries) for every group of the cells within `radius` (at most
@@ -327,17 +384,14 @@ class SampleGrid {
            ++j)
         for (std::int64_t k = std::max<std::int64_t>(lo.k, 0); k <= std::min(hi.k, kAxisCells - 1);
              ++k) {
-          const std::uint32_t id = find(key_of({i, j, k}));
-          if (id == kNone || !own_bins_[id].intersects(bins)) continue;
+          const std::uint32_t id = cells_.find(key_of({i, j, k}));
+          if (id == CellTable::kNone || !own_bins_[id].intersects(bins)) continue;
           for (std::uint32_t g = cell_groups_[id]; g < cell_groups_[id + 1]; ++g)
             if (bins.has(groups_[g].bin)) visit(groups_[g], groups_[g + 1].begin);
         }
   }
 
  private:
-  static constexpr std::uint64_t kEmpty = ~std::uint64_t(0);
-  static constexpr std::uint32_t kNone = ~std::uint32_t(0);
-
   /// The cell holding `p`, clamped to one cell beyond the grid on each side (points there or
   /// farther have no samples near them).
   Cell cell_of(const Vec3d& p) const {
@@ -355,26 +409,10 @@ class SampleGrid {
     return (std::uint64_t(c.i) << (2 * kAxisBits)) | (std::uint64_t(c.j) << kAxisBits) |
            std::uint64_t(c.k);
   }
-  std::size_t slot_of(std::uint64_t key) const {
-    return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> 20) & slot_mask_;
-  }
-  std::uint32_t find(std::uint64_t key) const {
-    std::size_t s = slot_of(key);
-    while (slot_key_[s] != kEmpty && slot_key_[s] != key) s = (s + 1) & slot_mask_;
-    return slot_key_[s] == kEmpty ? kNone : slot_cell_[s];
-  }
-  BinMask gather_bins(const Cell& c) const {
-    BinMask bins;
-    for (std::int64_t i = std::max<std::int64_t>(c.i - 1, 0);
-         i <= std::min(c.i + 1, kAxisCells - 1); ++i)
-      for (std::int64_t j = std::max<std::int64_t>(c.j - 1, 0);
-           j <= std::min(c.j + 1, kAxisCells - 1); ++j)
-        for (std::int64_t k = std::max<std::int64_t>(c.k - 1, 0);
-             k <= std::min(c.k + 1, kAxisCells - 1); ++k) {
-          const std::uint32_t id = find(key_of({i, j, k}));
-          if (id != kNone) bins |= own_bins_[id];
-        }
-    return bins;
+  static Cell cell_of_key(std::uint64_t key) {
+    return {static_cast<std::int64_t>(key >> (2 * kAxisBits)),
+            static_cast<std::int64_t>((key >> kAxisBits) & (kAxisCells - 1)),
+            static_cast<std::int64_t>(key & (kAxisCells - 1))};
   }
 
   Vec3d origin_;
@@ -385,9 +423,11 @@ class SampleGrid {
   std::vector<Group> groups_;               ///< ascending (cell, bin); one more marks the end
   std::vector<std::uint32_t> cell_groups_;  ///< cell c's groups: [cell_groups_[c], [c + 1])
   std::vector<BinMask> own_bins_;           ///< per cell: the bins of its groups
-  std::size_t slot_mask_ = 0;
-  std::vector<std::uint64_t> slot_key_;  ///< open addressing: cell key per slot, or kEmpty
-  std::vector<std::uint32_t> slot_cell_;
+  CellTable cells_;                         ///< cell key -> cell
+  CellTable blocks_;                        ///< key of a block of 2 x 2 x 2 cells -> block
+  std::vector<std::uint64_t> block_keys_;   ///< per block
+  std::vector<BinMask> block_bins_;         ///< per block: the bins of its cells
+  std::vector<BinMask> near_block_bins_;    ///< per block: the bins of it and its 26 neighbours
 };
 
 }  // namespace
@@ -414,7 +454,7 @@ void resolve_merges(TraceResult& r, const std::vector<std::uint32_t>& which,
   std::vector<std::uint32_t> new_end(which.size());
   std::vector<std::int64_t> partner(which.size(), -1);
   for_each_chunk(which.size(), [&](std::size_t begin, std::size_t end) {
-    SampleGrid::NearCache near;
+    SampleGrid::NearBins near;
     for (std::size_t w = begin; w < end; ++w) {
       const std::uint32_t j = which[w];
       new_end[w] = r.end[j];

@@ -12,8 +12,9 @@
 // The queries run against a grid of the eligible samples: cubic cells of side the point size
 // (larger only where the samples' extent would overflow 18 bits of cell index), each cell's
 // samples grouped by direction bin (a cube map of 6 x 8 x 8 bins) with the group's bounding box.
-// A querying sample first asks which bins occur in its cell and the 26 around it (cached per
-// thread): when none of them can hold a direction at the merge angle from its own, it is done.
+// A querying sample first asks which bins occur around it (one lookup: per block of 2 x 2 x 2
+// cells, the bins of the 27 blocks around it): when none of them can hold a direction at the
+// merge angle from its own, it is done.
 // Otherwise it visits only the groups within the point size whose bin is not entirely within the
 // merge angle of its direction, and tests their samples one by one with the rule above. Where
 // thousands of traces converge on one path, or run side by side down a fine mesh, the samples
