@@ -286,8 +286,17 @@ class SampleGrid {
       }
     });
 
-    cells_ = CellTable(cell_keys.size());
-    for (const std::uint64_t key : cell_keys) cells_.insert(key);
+    // Rows of cells along k: cells are sorted by (i, j, k), so a row is a run of them.
+    for (std::size_t c = 0; c < cell_keys.size(); ++c)
+      if (c == 0 || (cell_keys[c] >> kAxisBits) != (cell_keys[c - 1] >> kAxisBits))
+        row_begin_.push_back(static_cast<std::uint32_t>(c));
+    row_begin_.push_back(static_cast<std::uint32_t>(cell_keys.size()));
+    rows_ = CellTable(row_begin_.size() - 1);
+    for (std::size_t row = 0; row + 1 < row_begin_.size(); ++row)
+      rows_.insert(cell_keys[row_begin_[row]] >> kAxisBits);
+    cell_k_.resize(cell_keys.size());
+    for (std::size_t c = 0; c < cell_keys.size(); ++c)
+      cell_k_[c] = static_cast<std::uint32_t>(cell_keys[c] & (kAxisCells - 1));
     own_bins_.resize(cell_keys.size());
     for_each_index(cell_keys.size(), [&](std::size_t c) {
       for (std::uint32_t g = cell_groups_[c]; g < cell_groups_[c + 1]; ++g)
@@ -379,16 +388,23 @@ class SampleGrid {
                       const Visit& visit) const {
     const Cell lo = cell_of(p - Vec3d(radius, radius, radius));
     const Cell hi = cell_of(p + Vec3d(radius, radius, radius));
+    const std::int64_t k_lo = std::max<std::int64_t>(lo.k, 0);
+    const std::int64_t k_hi = std::min(hi.k, kAxisCells - 1);
     for (std::int64_t i = std::max<std::int64_t>(lo.i, 0); i <= std::min(hi.i, kAxisCells - 1); ++i)
       for (std::int64_t j = std::max<std::int64_t>(lo.j, 0); j <= std::min(hi.j, kAxisCells - 1);
-           ++j)
-        for (std::int64_t k = std::max<std::int64_t>(lo.k, 0); k <= std::min(hi.k, kAxisCells - 1);
-             ++k) {
-          const std::uint32_t id = cells_.find(key_of({i, j, k}));
-          if (id == CellTable::kNone || !own_bins_[id].intersects(bins)) continue;
+           ++j) {
+        const std::uint32_t row = rows_.find((std::uint64_t(i) << kAxisBits) | std::uint64_t(j));
+        if (row == CellTable::kNone) continue;
+        const std::uint32_t* first = cell_k_.data() + row_begin_[row];
+        const std::uint32_t* last = cell_k_.data() + row_begin_[row + 1];
+        for (const std::uint32_t* c = std::lower_bound(first, last, std::uint32_t(k_lo));
+             c != last && *c <= k_hi; ++c) {
+          const std::size_t id = static_cast<std::size_t>(c - cell_k_.data());
+          if (!own_bins_[id].intersects(bins)) continue;
           for (std::uint32_t g = cell_groups_[id]; g < cell_groups_[id + 1]; ++g)
             if (bins.has(groups_[g].bin)) visit(groups_[g], groups_[g + 1].begin);
         }
+      }
   }
 
  private:
@@ -423,7 +439,9 @@ class SampleGrid {
   std::vector<Group> groups_;               ///< ascending (cell, bin); one more marks the end
   std::vector<std::uint32_t> cell_groups_;  ///< cell c's groups: [cell_groups_[c], [c + 1])
   std::vector<BinMask> own_bins_;           ///< per cell: the bins of its groups
-  CellTable cells_;                         ///< cell key -> cell
+  CellTable rows_;                          ///< (i, j) of a row of cells along k -> row
+  std::vector<std::uint32_t> row_begin_;    ///< row r's cells: [row_begin_[r], row_begin_[r + 1])
+  std::vector<std::uint32_t> cell_k_;       ///< per cell: its k, ascending within a row
   CellTable blocks_;                        ///< key of a block of 2 x 2 x 2 cells -> block
   std::vector<std::uint64_t> block_keys_;   ///< per block
   std::vector<BinMask> block_bins_;         ///< per block: the bins of its cells
@@ -453,8 +471,16 @@ void resolve_merges(TraceResult& r, const std::vector<std::uint32_t>& which,
 
   std::vector<std::uint32_t> new_end(which.size());
   std::vector<std::int64_t> partner(which.size(), -1);
+  struct NearGroup {
+    double gap2;
+    std::uint32_t begin, end;  ///< entries
+    bool operator<(const NearGroup& o) const {
+      return gap2 != o.gap2 ? gap2 < o.gap2 : begin < o.begin;
+    }
+  };
   for_each_chunk(which.size(), [&](std::size_t begin, std::size_t end) {
     SampleGrid::NearBins near;
+    std::vector<NearGroup> near_groups;
     for (std::size_t w = begin; w < end; ++w) {
       const std::uint32_t j = which[w];
       new_end[w] = r.end[j];
@@ -469,6 +495,9 @@ void resolve_merges(TraceResult& r, const std::vector<std::uint32_t>& which,
         double best = std::numeric_limits<double>::infinity();
         std::uint32_t best_sample = 0;
         const SampleGrid::Local ql = grid.to_local(q);
+        // The groups that may hold a partner, nearest box first: once a partner is found,
+        // groups farther than it are not read.
+        near_groups.clear();
         grid.for_each_group(q, ps, may_merge, [&](const Group& g, std::uint32_t group_end) {
           // Every direction of the bin within the merge angle of this sample's.
           if (g.bin != kUndirected && directed &&
@@ -480,27 +509,32 @@ void resolve_merges(TraceResult& r, const std::vector<std::uint32_t>& which,
                 g.lo[a] > q[a] ? g.lo[a] - q[a] : (q[a] > g.hi[a] ? q[a] - g.hi[a] : 0);
             gap2 += t * t;
           }
-          if (gap2 > ps2) return;
-          for (std::uint32_t e = g.begin; e < group_end; ++e) {
+          if (gap2 <= ps2) near_groups.push_back({gap2, g.begin, group_end});
+        });
+        std::sort(near_groups.begin(), near_groups.end());
+        for (const NearGroup& g : near_groups) {
+          // Rounding slack: a sample at exactly `best` must still be read (ties).
+          if (partner[w] >= 0 && std::sqrt(g.gap2) > best * (1.0 + 1e-12)) break;
+          for (std::uint32_t e = g.begin; e < g.end; ++e) {
             const SampleGrid::Local& l = grid.local(e);
             const float dx = l.x - ql.x, dy = l.y - ql.y, dz = l.z - ql.z;
             if (dx * dx + dy * dy + dz * dz > ps2_local) continue;
             const Entry& entry = grid.entry(e);
             const Vec3d& s = r.samples[entry.sample];
-            if (norm2(s - q) > ps2) continue;
+            const double d2 = norm2(s - q);
+            if (d2 > ps2) continue;
+            const double d = std::sqrt(d2);  // distance(q, s), bit for bit
+            // Ties go to the smallest (trace, sample): the order of the samples' indices.
+            if (d > best || (d == best && entry.sample > best_sample)) continue;
             const std::uint32_t k = entry.trace;
             if (k == j) continue;
             if (dot(dir, sample_direction(r, k, entry.sample - r.offsets[k])) > cos_merge) continue;
             if (distance(pj, r.sample(k, 0)) < ps) continue;  // started side by side
-            const double d = distance(q, s);
-            // Ties go to the smallest (trace, sample): the order of the samples' indices.
-            if (d < best || (d == best && entry.sample < best_sample)) {
-              best = d;
-              best_sample = entry.sample;
-              partner[w] = k;
-            }
+            best = d;
+            best_sample = entry.sample;
+            partner[w] = k;
           }
-        });
+        }
         if (partner[w] >= 0) new_end[w] = i;
       }
     }
