@@ -228,16 +228,23 @@ class SampleGrid {
     if (begin.back() == 0) return;
     // Cells from the lowest corner of the samples; wider than the point size only where the
     // extent needs more than kAxisBits of cell index.
-    Vec3d lo(std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
-             std::numeric_limits<double>::infinity());
-    Vec3d hi = -lo;
-    for (std::size_t w = 0; w < indexed.size(); ++w)
+    const double inf = std::numeric_limits<double>::infinity();
+    std::vector<Vec3d> trace_lo(indexed.size(), Vec3d(inf, inf, inf)),
+        trace_hi(indexed.size(), Vec3d(-inf, -inf, -inf));
+    for_each_index(indexed.size(), [&](std::size_t w) {
       for (std::uint32_t m = 0; m < eligible[w]; ++m) {
         const Vec3d& p = r.sample(indexed[w], m);
         for (int a = 0; a < 3; ++a) {
-          lo[a] = std::min(lo[a], p[a]);
-          hi[a] = std::max(hi[a], p[a]);
+          trace_lo[w][a] = std::min(trace_lo[w][a], p[a]);
+          trace_hi[w][a] = std::max(trace_hi[w][a], p[a]);
         }
+      }
+    });
+    Vec3d lo(inf, inf, inf), hi = -lo;
+    for (std::size_t w = 0; w < indexed.size(); ++w)
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = std::min(lo[a], trace_lo[w][a]);
+        hi[a] = std::max(hi[a], trace_hi[w][a]);
       }
     origin_ = lo;
     extent_ = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
