@@ -9,7 +9,7 @@
 // Without MESH: the Table 1 shapes (assets/shapes.h, detail 1) at 128^3, then at 512^3
 // ../shared/meshes/fandisk.obj and make_shape("box", 46) (101,568 faces); --no-large skips the
 // two 512^3 runs. Each mesh's fields are built once (all threads); each thread count then traces
-// it once with the default options (RK2, hash-grid point index). "trace" is the integration,
+// it once with the default options (RK2). "trace" is the integration,
 // "merge" the merge resolution; traces/s = traces / (trace + merge). The 2-thread result is
 // checked byte for byte against the 1-thread one. Prints Markdown.
 //
