@@ -197,8 +197,11 @@ void ShellChecker::Impl::move_prisms(const TetMesh& mesh, const std::vector<std:
     return;
   }
   std::vector<std::uint32_t> keys;
+  for (const MovedPrism& p : fresh)
+    for (std::uint32_t k = 0; k < tet_count[p.face]; ++k) keys.push_back(3 * p.face + k);
+  phase->remove(keys);
+  keys.clear();
   for (const MovedPrism& p : fresh) {
-    for (std::uint32_t k = 0; k < tet_count[p.face]; ++k) phase->remove(3 * p.face + k);
     for (std::uint32_t k = 0; k < p.count; ++k) {
       keys.push_back(3 * p.face + k);
       phase->set_geometry(keys.back(), p.geo[k]);
