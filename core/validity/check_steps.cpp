@@ -103,27 +103,42 @@ void check_boundary_faces(const SurfaceMesh& surface, const TetMesh& mesh,
     if (j - i > 2) ++result.nonmanifold_faces;
     i = j;
   }
+  // Per input triangle, in parallel: 0 a boundary face, 1 missing, 2 shared, 3 misoriented.
+  const std::size_t n_triangles = surface.triangles.size();
+  std::vector<std::uint8_t> verdict(n_triangles, 0);
+  for_each_chunk(
+      n_triangles,
+      [&](std::size_t begin, std::size_t end) {
+        for (std::size_t f = begin; f != end; ++f) {
+          const Triangle& tri = surface.triangles[f];
+          const FaceRecord probe{sorted3(tri[0], tri[1], tri[2]), 0, 0};
+          const auto lo = std::lower_bound(faces.begin(), faces.end(), probe);
+          auto hi = lo;
+          while (hi != faces.end() && hi->same_key(probe)) ++hi;
+          const std::ptrdiff_t count = hi - lo;
+          if (count == 0) {
+            verdict[f] = 1;
+          } else if (count > 1) {
+            verdict[f] = 2;
+          } else {
+            const Tet& v = mesh.tets[lo->tet];
+            const int* k = kTetOutwardFace[lo->face];
+            if (!same_cycle({v[k[0]], v[k[1]], v[k[2]]}, tri)) verdict[f] = 3;
+          }
+        }
+      },
+      1024);
   const std::size_t max_listed = options.max_listed;
-  for (std::size_t f = 0; f < surface.triangles.size(); ++f) {
-    const Triangle& tri = surface.triangles[f];
-    const FaceRecord probe{sorted3(tri[0], tri[1], tri[2]), 0, 0};
-    const auto lo = std::lower_bound(faces.begin(), faces.end(), probe);
-    auto hi = lo;
-    while (hi != faces.end() && hi->same_key(probe)) ++hi;
-    const std::ptrdiff_t count = hi - lo;
-    if (count == 0) {
+  for (std::size_t f = 0; f < n_triangles; ++f) {
+    if (verdict[f] == 1) {
       ++result.missing_triangles;
       list_item(result.first_missing_triangles, max_listed, f);
-    } else if (count > 1) {
+    } else if (verdict[f] == 2) {
       ++result.shared_triangles;
       list_item(result.first_shared_triangles, max_listed, f);
-    } else {
-      const Tet& v = mesh.tets[lo->tet];
-      const int* k = kTetOutwardFace[lo->face];
-      if (!same_cycle({v[k[0]], v[k[1]], v[k[2]]}, tri)) {
-        ++result.misoriented_triangles;
-        list_item(result.first_misoriented_triangles, max_listed, f);
-      }
+    } else if (verdict[f] == 3) {
+      ++result.misoriented_triangles;
+      list_item(result.first_misoriented_triangles, max_listed, f);
     }
   }
 }

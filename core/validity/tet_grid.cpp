@@ -154,24 +154,26 @@ void PooledLists::set(std::size_t s, const std::uint32_t* first, std::size_t cou
   compact_if_sparse();
 }
 
-void PooledLists::insert_sorted(std::size_t s, std::uint32_t v) {
+void PooledLists::merge_sorted(std::size_t s, const std::uint32_t* first, std::size_t count) {
+  if (count == 0) return;
   const std::uint64_t from = begin_[s];
   const std::size_t n = size_[s];
-  const std::uint64_t to = relocate(s, n + 1);  // pool_ may move: indices only
-  std::size_t k = 0;
-  for (; k < n && pool_[from + k] < v; ++k) pool_[to + k] = pool_[from + k];
-  pool_[to + k] = v;
-  for (; k < n; ++k) pool_[to + k + 1] = pool_[from + k];
+  const std::uint64_t to = relocate(s, n + count);  // pool_ may move: indices only
+  std::size_t a = 0, b = 0, k = 0;
+  while (a < n && b < count)
+    pool_[to + k++] = pool_[from + a] < first[b] ? pool_[from + a++] : first[b++];
+  while (a < n) pool_[to + k++] = pool_[from + a++];
+  while (b < count) pool_[to + k++] = first[b++];
   compact_if_sparse();
 }
 
-void PooledLists::erase_sorted(std::size_t s, std::uint32_t v) {
+void PooledLists::erase_flagged(std::size_t s, const std::vector<std::uint8_t>& drop) {
   const auto first = pool_.begin() + static_cast<std::ptrdiff_t>(begin_[s]);
   const auto last = first + size_[s];
-  const auto at = std::lower_bound(first, last, v);
-  std::copy(at + 1, last, at);
-  --size_[s];
-  ++unused_;
+  const auto kept = std::remove_if(first, last, [&](std::uint32_t v) { return drop[v] != 0; });
+  const auto removed = static_cast<std::size_t>(last - kept);
+  size_[s] -= static_cast<std::uint32_t>(removed);
+  unused_ += removed;
 }
 
 void PooledLists::compact_if_sparse() {
@@ -299,27 +301,51 @@ void BroadPhase::insert(const std::vector<std::uint32_t>& keys) {
     cell_keys_.assign(std::move(cell_start), std::move(items));
     key_cells_.assign(std::move(key_start), std::move(cells));  // keys ascending: in key order
   } else {
+    // Every (cell, key) entry, by cell and then key: each cell's list is merged once.
+    std::vector<std::uint64_t> entries;
+    entries.reserve(cells.size());
     for (std::size_t i = 0; i < n; ++i) {
       const std::uint32_t key = keys[i];
       key_cells_.set(key, cells.data() + start[i], start[i + 1] - start[i]);
       for (std::uint64_t k = start[i]; k < start[i + 1]; ++k)
-        cell_keys_.insert_sorted(cells[k], key);
+        entries.push_back(std::uint64_t{cells[k]} << 32 | key);
+    }
+    std::sort(entries.begin(), entries.end());
+    std::vector<std::uint32_t> run;
+    for (std::size_t i = 0; i < entries.size();) {
+      const auto cell = static_cast<std::uint32_t>(entries[i] >> 32);
+      run.clear();
+      for (; i < entries.size() && static_cast<std::uint32_t>(entries[i] >> 32) == cell; ++i)
+        run.push_back(static_cast<std::uint32_t>(entries[i]));
+      cell_keys_.merge_sorted(cell, run.data(), run.size());
     }
   }
   size_ += n;
 }
 
-void BroadPhase::remove(std::uint32_t key) {
-  if (state_[key] == kAbsent) return;
-  if (state_[key] == kStray) {
-    stray_keys_.erase(std::find(stray_keys_.begin(), stray_keys_.end(), key));
-  } else {
-    for (const std::uint32_t* c = key_cells_.begin(key); c != key_cells_.end(key); ++c)
-      cell_keys_.erase_sorted(*c, key);
-    key_cells_.set(key, nullptr, 0);
+void BroadPhase::remove(const std::vector<std::uint32_t>& keys) {
+  std::vector<std::uint8_t> drop(geo_.size(), 0);
+  std::vector<std::uint32_t> cells;
+  bool stray = false;
+  for (const std::uint32_t key : keys) {
+    if (state_[key] == kAbsent) continue;
+    drop[key] = 1;
+    if (state_[key] == kStray) {
+      stray = true;
+    } else {
+      cells.insert(cells.end(), key_cells_.begin(key), key_cells_.end(key));
+      key_cells_.set(key, nullptr, 0);
+    }
+    state_[key] = kAbsent;
+    --size_;
   }
-  state_[key] = kAbsent;
-  --size_;
+  if (stray)
+    stray_keys_.erase(std::remove_if(stray_keys_.begin(), stray_keys_.end(),
+                                     [&](std::uint32_t k) { return drop[k] != 0; }),
+                      stray_keys_.end());
+  std::sort(cells.begin(), cells.end());
+  cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+  for (const std::uint32_t c : cells) cell_keys_.erase_flagged(c, drop);
 }
 
 }  // namespace vdb_shell

@@ -86,10 +86,11 @@ class PooledLists {
 
   /// Replaces list s by the `count` values from `first`.
   void set(std::size_t s, const std::uint32_t* first, std::size_t count);
-  /// Inserts `v` into the ascending list s, which does not hold it.
-  void insert_sorted(std::size_t s, std::uint32_t v);
-  /// Removes `v` from the ascending list s, which holds it.
-  void erase_sorted(std::size_t s, std::uint32_t v);
+  /// Merges the ascending `count` values from `first`, none of them in it, into the ascending
+  /// list s (one copy of the list however many values come).
+  void merge_sorted(std::size_t s, const std::uint32_t* first, std::size_t count);
+  /// Removes from list s every value v with drop[v] != 0, keeping the others' order.
+  void erase_flagged(std::size_t s, const std::vector<std::uint8_t>& drop);
 
  private:
   // Moves list s to `count` fresh entries at the end of the pool, its old entries unused.
@@ -121,8 +122,9 @@ class BroadPhase {
   /// Enters the tets `keys` (ascending, absent) at their geometry. Their cells are found in
   /// parallel; into an empty phase the cell lists are built in one pass.
   void insert(const std::vector<std::uint32_t>& keys);
-  /// Removes tet `key`; does nothing when it is absent.
-  void remove(std::uint32_t key);
+  /// Removes the tets `keys` (distinct); does nothing for those absent. Each cell's list is
+  /// edited once, however many of them it held.
+  void remove(const std::vector<std::uint32_t>& keys);
 
   const SurfaceMesh& surface() const { return surface_; }
   std::size_t key_count() const { return geo_.size(); }
