@@ -312,21 +312,20 @@ class SampleGrid {
 
     // Blocks of 2 x 2 x 2 cells: the bins of each block and of the 26 blocks around it.
     blocks_ = CellTable(cell_keys.size());
-    for (std::size_t c = 0; c < cell_keys.size(); ++c) {
-      const Cell cell = cell_of_key(cell_keys[c]);
-      const std::uint32_t b = blocks_.insert(key_of({cell.i / 2, cell.j / 2, cell.k / 2}));
-      if (b == block_bins_.size()) block_bins_.emplace_back();
-      block_bins_[b] |= own_bins_[c];
-    }
-    block_keys_.resize(blocks_.size());
+    std::vector<std::uint64_t> block_keys;
     for (std::size_t c = 0; c < cell_keys.size(); ++c) {
       const Cell cell = cell_of_key(cell_keys[c]);
       const std::uint64_t key = key_of({cell.i / 2, cell.j / 2, cell.k / 2});
-      block_keys_[blocks_.find(key)] = key;
+      const std::uint32_t b = blocks_.insert(key);
+      if (b == block_bins_.size()) {
+        block_bins_.emplace_back();
+        block_keys.push_back(key);
+      }
+      block_bins_[b] |= own_bins_[c];
     }
     near_block_bins_.resize(blocks_.size());
     for_each_index(blocks_.size(), [&](std::size_t b) {
-      const Cell centre = cell_of_key(block_keys_[b]);
+      const Cell centre = cell_of_key(block_keys[b]);
       BinMask& near = near_block_bins_[b];
       for (std::int64_t i = std::max<std::int64_t>(centre.i - 1, 0); i <= centre.i + 1; ++i)
         for (std::int64_t j = std::max<std::int64_t>(centre.j - 1, 0); j <= centre.j + 1; ++j)
@@ -450,7 +449,6 @@ class SampleGrid {
   std::vector<std::uint32_t> row_begin_;    ///< row r's cells: [row_begin_[r], row_begin_[r + 1])
   std::vector<std::uint32_t> cell_k_;       ///< per cell: its k, ascending within a row
   CellTable blocks_;                        ///< key of a block of 2 x 2 x 2 cells -> block
-  std::vector<std::uint64_t> block_keys_;   ///< per block
   std::vector<BinMask> block_bins_;         ///< per block: the bins of its cells
   std::vector<BinMask> near_block_bins_;    ///< per block: the bins of it and its 26 neighbours
 };
