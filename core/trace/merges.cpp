@@ -127,10 +127,8 @@ const BinGeometry& bin_geometry() {
 
 /// The bins against the merge angle.
 struct Bins {
-  /// Per directed bin: its centre direction, and the cosine above which a direction's angle to
-  /// the centre guarantees that every direction of the bin lies within the merge angle of it
-  /// (2: never).
-  std::array<Vec3d, kDirectedBins> centre;
+  /// Per directed bin: the cosine above which a direction's angle to the bin's centre guarantees
+  /// that every direction of the bin lies within the merge angle of it (2: never).
   std::array<double, kDirectedBins> cos_skip;
   /// Per bin of a querying sample's direction: the bins holding a direction that may lie at the
   /// merge angle or more from some direction of it (all bins for the undirected one).
@@ -140,7 +138,6 @@ struct Bins {
 Bins make_bins(double merge_angle) {
   const BinGeometry& g = bin_geometry();
   Bins b;
-  b.centre = g.centre;
   for (int bin = 0; bin < kDirectedBins; ++bin) {
     const double budget = merge_angle - g.radius[bin] - kAngleMargin;
     b.cos_skip[bin] = budget > 0.0 ? std::cos(budget) : 2.0;
@@ -167,7 +164,7 @@ struct Entry {
 
 /// The entries of one cell in one direction bin, and their bounding box.
 struct Group {
-  Vec3d lo, hi;
+  BBox box;
   std::uint32_t begin = 0;  ///< the group's entries are [begin, next group's begin)
   std::uint32_t bin = 0;
 };
@@ -228,26 +225,18 @@ class SampleGrid {
     if (begin.back() == 0) return;
     // Cells from the lowest corner of the samples; wider than the point size only where the
     // extent needs more than kAxisBits of cell index.
-    const double inf = std::numeric_limits<double>::infinity();
-    std::vector<Vec3d> trace_lo(indexed.size(), Vec3d(inf, inf, inf)),
-        trace_hi(indexed.size(), Vec3d(-inf, -inf, -inf));
+    std::vector<BBox> trace_box(indexed.size());
     for_each_index(indexed.size(), [&](std::size_t w) {
-      for (std::uint32_t m = 0; m < eligible[w]; ++m) {
-        const Vec3d& p = r.sample(indexed[w], m);
-        for (int a = 0; a < 3; ++a) {
-          trace_lo[w][a] = std::min(trace_lo[w][a], p[a]);
-          trace_hi[w][a] = std::max(trace_hi[w][a], p[a]);
-        }
-      }
+      for (std::uint32_t m = 0; m < eligible[w]; ++m) trace_box[w].expand(r.sample(indexed[w], m));
     });
-    Vec3d lo(inf, inf, inf), hi = -lo;
-    for (std::size_t w = 0; w < indexed.size(); ++w)
-      for (int a = 0; a < 3; ++a) {
-        lo[a] = std::min(lo[a], trace_lo[w][a]);
-        hi[a] = std::max(hi[a], trace_hi[w][a]);
+    BBox box;
+    for (const BBox& b : trace_box)
+      if (!b.empty()) {
+        box.expand(b.lo);
+        box.expand(b.hi);
       }
-    origin_ = lo;
-    extent_ = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+    origin_ = box.lo;
+    extent_ = box.max_side();
     side_ = std::max(point_size, extent_ / double(kAxisCells - 4));
     if (!(side_ > 0.0)) side_ = 1.0;
 
@@ -282,15 +271,8 @@ class SampleGrid {
     groups_.emplace_back();
     groups_.back().begin = static_cast<std::uint32_t>(entries_.size());
     for_each_index(groups_.size() - 1, [&](std::size_t g) {
-      Group& group = groups_[g];
-      group.lo = group.hi = r.samples[entries_[group.begin].sample];
-      for (std::uint32_t e = group.begin + 1; e < groups_[g + 1].begin; ++e) {
-        const Vec3d& p = r.samples[entries_[e].sample];
-        for (int a = 0; a < 3; ++a) {
-          group.lo[a] = std::min(group.lo[a], p[a]);
-          group.hi[a] = std::max(group.hi[a], p[a]);
-        }
-      }
+      for (std::uint32_t e = groups_[g].begin; e < groups_[g + 1].begin; ++e)
+        groups_[g].box.expand(r.samples[entries_[e].sample]);
     });
 
     // Rows of cells along k: cells are sorted by (i, j, k), so a row is a run of them.
@@ -325,14 +307,7 @@ class SampleGrid {
     }
     near_block_bins_.resize(blocks_.size());
     for_each_index(blocks_.size(), [&](std::size_t b) {
-      const Cell centre = cell_of_key(block_keys[b]);
-      BinMask& near = near_block_bins_[b];
-      for (std::int64_t i = std::max<std::int64_t>(centre.i - 1, 0); i <= centre.i + 1; ++i)
-        for (std::int64_t j = std::max<std::int64_t>(centre.j - 1, 0); j <= centre.j + 1; ++j)
-          for (std::int64_t k = std::max<std::int64_t>(centre.k - 1, 0); k <= centre.k + 1; ++k) {
-            const std::uint32_t other = blocks_.find(key_of({i, j, k}));
-            if (other != CellTable::kNone) near |= block_bins_[other];
-          }
+      near_block_bins_[b] = bins_around(cell_of_key(block_keys[b]));
     });
   }
 
@@ -372,18 +347,8 @@ class SampleGrid {
       return last.bins;
     last.block = block;
     const std::uint32_t b = in_grid(block) ? blocks_.find(key_of(block)) : CellTable::kNone;
-    if (b != CellTable::kNone) {
-      last.bins = near_block_bins_[b];
-    } else {  // no samples in the block itself: its neighbours' bins
-      last.bins = BinMask();
-      for (std::int64_t i = std::max<std::int64_t>(block.i - 1, 0); i <= block.i + 1; ++i)
-        for (std::int64_t j = std::max<std::int64_t>(block.j - 1, 0); j <= block.j + 1; ++j)
-          for (std::int64_t k = std::max<std::int64_t>(block.k - 1, 0); k <= block.k + 1; ++k) {
-            const std::uint32_t other =
-                in_grid({i, j, k}) ? blocks_.find(key_of({i, j, k})) : CellTable::kNone;
-            if (other != CellTable::kNone) last.bins |= block_bins_[other];
-          }
-    }
+    // A block without samples of its own has no precomputed answer.
+    last.bins = b != CellTable::kNone ? near_block_bins_[b] : bins_around(block);
     return last.bins;
   }
 
@@ -430,6 +395,18 @@ class SampleGrid {
   static std::uint64_t key_of(const Cell& c) {
     return (std::uint64_t(c.i) << (2 * kAxisBits)) | (std::uint64_t(c.j) << kAxisBits) |
            std::uint64_t(c.k);
+  }
+  /// The bins of the blocks within one block of `block` (block coordinates).
+  BinMask bins_around(const Cell& block) const {
+    BinMask bins;
+    for (std::int64_t i = std::max<std::int64_t>(block.i - 1, 0); i <= block.i + 1; ++i)
+      for (std::int64_t j = std::max<std::int64_t>(block.j - 1, 0); j <= block.j + 1; ++j)
+        for (std::int64_t k = std::max<std::int64_t>(block.k - 1, 0); k <= block.k + 1; ++k) {
+          const std::uint32_t other =
+              in_grid({i, j, k}) ? blocks_.find(key_of({i, j, k})) : CellTable::kNone;
+          if (other != CellTable::kNone) bins |= block_bins_[other];
+        }
+    return bins;
   }
   static Cell cell_of_key(std::uint64_t key) {
     return {static_cast<std::int64_t>(key >> (2 * kAxisBits)),
@@ -506,12 +483,13 @@ void resolve_merges(TraceResult& r, const std::vector<std::uint32_t>& which,
         grid.for_each_group(q, ps, may_merge, [&](const Group& g, std::uint32_t group_end) {
           // Every direction of the bin within the merge angle of this sample's.
           if (g.bin != kUndirected && directed &&
-              dot(dir, bins.centre[g.bin]) > bins.cos_skip[g.bin])
+              dot(dir, bin_geometry().centre[g.bin]) > bins.cos_skip[g.bin])
             return;
           double gap2 = 0;  // squared distance from q to the group's box
           for (int a = 0; a < 3; ++a) {
-            const double t =
-                g.lo[a] > q[a] ? g.lo[a] - q[a] : (q[a] > g.hi[a] ? q[a] - g.hi[a] : 0);
+            const double t = g.box.lo[a] > q[a]   ? g.box.lo[a] - q[a]
+                             : q[a] > g.box.hi[a] ? q[a] - g.box.hi[a]
+                                                  : 0;
             gap2 += t * t;
           }
           if (gap2 <= ps2) near_groups.push_back({gap2, g.begin, group_end});

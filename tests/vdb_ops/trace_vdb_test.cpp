@@ -249,7 +249,7 @@ void brute_force_merges(TraceResult& r, const std::vector<std::uint32_t>& which,
   constexpr std::uint32_t kBlock = 8;
   struct Block {
     std::uint32_t trace, first, last;
-    Vec3d lo, hi;
+    BBox box;
   };
   std::vector<Block> blocks;  // ascending (trace, sample)
   for (const std::uint32_t k : indexed) {
@@ -257,13 +257,8 @@ void brute_force_merges(TraceResult& r, const std::vector<std::uint32_t>& which,
     while (eligible <= r.end[k] && r.end_arc(k) - r.arc_length[r.offsets[k] + eligible] >= 2.0 * ps)
       ++eligible;
     for (std::uint32_t first = 0; first < eligible; first += kBlock) {
-      Block b{k, first, std::min(first + kBlock, eligible) - 1, r.sample(k, first),
-              r.sample(k, first)};
-      for (std::uint32_t m = b.first; m <= b.last; ++m)
-        for (int a = 0; a < 3; ++a) {
-          b.lo[a] = std::min(b.lo[a], r.sample(k, m)[a]);
-          b.hi[a] = std::max(b.hi[a], r.sample(k, m)[a]);
-        }
+      Block b{k, first, std::min(first + kBlock, eligible) - 1, {}};
+      for (std::uint32_t m = b.first; m <= b.last; ++m) b.box.expand(r.sample(k, m));
       blocks.push_back(b);
     }
   }
@@ -276,7 +271,8 @@ void brute_force_merges(TraceResult& r, const std::vector<std::uint32_t>& which,
       double best = std::numeric_limits<double>::infinity();
       for (const Block& b : blocks) {
         bool near = true;
-        for (int a = 0; a < 3; ++a) near = near && q[a] >= b.lo[a] - ps && q[a] <= b.hi[a] + ps;
+        for (int a = 0; a < 3; ++a)
+          near = near && q[a] >= b.box.lo[a] - ps && q[a] <= b.box.hi[a] + ps;
         if (!near || b.trace == j || distance(r.sample(j, 0), r.sample(b.trace, 0)) < ps) continue;
         for (std::uint32_t m = b.first; m <= b.last; ++m) {
           const double d = distance(q, r.sample(b.trace, m));
