@@ -405,12 +405,12 @@ std::string report_html(const ShellResult& r, const ReportFiles& files, double r
   h << "<h2>Traces</h2><div class=\"grid\"><figure>";
   {
     const Camera camera = Camera::framing(box, view(0), {0, 0, 1}, 560, 480);
+    const std::size_t stride = trace_stride(tr.num_traces(), kMaxTraces);
     h << img(render_traces(r.surface, tr, camera, kMaxTraces, kSupersample), camera, "traces")
       << "<figcaption>"
-      << (trace_stride(tr.num_traces(), kMaxTraces) > 1
-              ? "One in " + std::to_string(trace_stride(tr.num_traces(), kMaxTraces)) + " of the " +
-                    std::to_string(tr.num_traces()) + " traces"
-              : "All " + std::to_string(tr.num_traces()) + " traces")
+      << (stride > 1 ? "One in " + std::to_string(stride) + " of the " +
+                           std::to_string(tr.num_traces()) + " traces"
+                     : "All " + std::to_string(tr.num_traces()) + " traces")
       << ", from the surface vertex to where it stopped.</figcaption></figure><table>\n";
   }
   const char* reasons[4] = {"critical point", "merge", "flux", "cap"};

@@ -103,9 +103,10 @@ void check_boundary_faces(const SurfaceMesh& surface, const TetMesh& mesh,
     if (j - i > 2) ++result.nonmanifold_faces;
     i = j;
   }
-  // Per input triangle, in parallel: 0 a boundary face, 1 missing, 2 shared, 3 misoriented.
+  // Per input triangle, in parallel; counted and listed in triangle order after.
+  enum Verdict : std::uint8_t { kBoundaryFace, kMissing, kShared, kMisoriented };
   const std::size_t n_triangles = surface.triangles.size();
-  std::vector<std::uint8_t> verdict(n_triangles, 0);
+  std::vector<std::uint8_t> verdict(n_triangles, kBoundaryFace);
   for_each_chunk(
       n_triangles,
       [&](std::size_t begin, std::size_t end) {
@@ -117,26 +118,26 @@ void check_boundary_faces(const SurfaceMesh& surface, const TetMesh& mesh,
           while (hi != faces.end() && hi->same_key(probe)) ++hi;
           const std::ptrdiff_t count = hi - lo;
           if (count == 0) {
-            verdict[f] = 1;
+            verdict[f] = kMissing;
           } else if (count > 1) {
-            verdict[f] = 2;
+            verdict[f] = kShared;
           } else {
             const Tet& v = mesh.tets[lo->tet];
             const int* k = kTetOutwardFace[lo->face];
-            if (!same_cycle({v[k[0]], v[k[1]], v[k[2]]}, tri)) verdict[f] = 3;
+            if (!same_cycle({v[k[0]], v[k[1]], v[k[2]]}, tri)) verdict[f] = kMisoriented;
           }
         }
       },
       1024);
   const std::size_t max_listed = options.max_listed;
   for (std::size_t f = 0; f < n_triangles; ++f) {
-    if (verdict[f] == 1) {
+    if (verdict[f] == kMissing) {
       ++result.missing_triangles;
       list_item(result.first_missing_triangles, max_listed, f);
-    } else if (verdict[f] == 2) {
+    } else if (verdict[f] == kShared) {
       ++result.shared_triangles;
       list_item(result.first_shared_triangles, max_listed, f);
-    } else if (verdict[f] == 3) {
+    } else if (verdict[f] == kMisoriented) {
       ++result.misoriented_triangles;
       list_item(result.first_misoriented_triangles, max_listed, f);
     }
