@@ -106,8 +106,15 @@ void print_summary(std::ostream& out, const std::string& path, const LoadedSurfa
       << "volume      " << fmt(st.enclosed_volume) << "\n";
 }
 
-/// Rejects options that contradict each other, saying what to do instead.
 bool is_vdb(const std::string& path) { return lower_extension(path) == ".vdb"; }
+
+/// True if write_surface() can write `path`.
+bool surface_extension(const std::string& path) {
+  const std::vector<std::string>& known = surface_output_extensions();
+  return std::find(known.begin(), known.end(), lower_extension(path)) != known.end();
+}
+
+/// Rejects options that contradict each other, saying what to do instead.
 
 void check_contradictions(const CliOptions& o) {
   namespace fs = std::filesystem;
@@ -135,10 +142,6 @@ void check_contradictions(const CliOptions& o) {
     throw InputError(
         "--repair-closing, --repair-voxel-size and --repaired describe a repair: "
         "add --repair");
-  if (o.shell.repair && std::any_of(o.inputs.begin(), o.inputs.end(), is_vdb))
-    throw InputError(
-        "--repair rebuilds a mesh file: a .vdb INPUT is already a level set; drop "
-        "--repair");
   if (o.batch()) {
     if (o.msh_version_given && o.format != "msh")
       throw InputError(
@@ -189,13 +192,13 @@ void check_outputs(const CliOptions& o) {
     folder_exists(o.paths, "--paths");
   }
   if (!o.inner.empty()) {
-    if (!ext_is(o.inner, ".obj") && !ext_is(o.inner, ".ply") && !ext_is(o.inner, ".off"))
-      throw InputError("--inner " + o.inner + ": use .obj, .ply or .off");
+    if (!surface_extension(o.inner))
+      throw InputError("--inner " + o.inner + ": use .obj, .ply, .off or .stl");
     folder_exists(o.inner, "--inner");
   }
   if (!o.repaired.empty()) {
-    if (!ext_is(o.repaired, ".obj") && !ext_is(o.repaired, ".ply") && !ext_is(o.repaired, ".off"))
-      throw InputError("--repaired " + o.repaired + ": use .obj, .ply or .off");
+    if (!surface_extension(o.repaired))
+      throw InputError("--repaired " + o.repaired + ": use .obj, .ply, .off or .stl");
     folder_exists(o.repaired, "--repaired");
   }
   if (!o.report.empty()) folder_exists(o.report, "--report");
@@ -323,18 +326,21 @@ RunOutcome run_pipeline(const CliOptions& opt, std::ostream& out, std::ostream& 
   const bool vdb_input = is_vdb(opt.input);
   RepairReport repair;
   const LoadedSurface surface = [&] {
-    if (vdb_input) return load_level_set_surface(opt.input, shell);
-    if (shell.repair)
-      return load_repaired_surface(read_polygon_soup(opt.input), opt.input, shell, repair);
+    if (shell.repair) {
+      return vdb_input
+                 ? load_level_set_surface(opt.input, shell, &repair)
+                 : load_repaired_surface(read_polygon_soup(opt.input), opt.input, shell, repair);
+    }
     try {
-      return load_surface(opt.input);
-    } catch (const InputError& e) {  // a mesh that is not closed or crosses itself
+      return vdb_input ? load_level_set_surface(opt.input, shell) : load_surface(opt.input);
+    } catch (const InputError& e) {  // a surface that is not closed or crosses itself
       const std::string what = e.what();
       if (what.find("not a closed 2-manifold triangle surface") == std::string::npos) throw;
       throw InputError(what + " — or rerun with --repair to rebuild it watertight");
     }
   }();
-  if (vdb_input) shell.level_set = opt.input;
+  // A .vdb input is its own field; repaired, its surface gets fields of its own.
+  if (vdb_input && !shell.repair) shell.level_set = opt.input;
   const double t_read = progress.stop();
   if (!opt.quiet)
     for (const std::string& n : surface.notices) err << "vdb_shell: note: " << n << "\n";
@@ -533,7 +539,7 @@ void register_options(CLI::App& app, CliOptions& opt) {
       ->check(CLI::NonNegativeNumber)
       ->group(in);
   app.add_option("--repaired", opt.repaired,
-                 "--repair: write the repaired surface (.obj .ply .off)")
+                 "--repair: write the repaired surface (.obj .ply .off .stl)")
       ->group(in);
 
   const char* fg = "Fields";
@@ -625,7 +631,7 @@ void register_options(CLI::App& app, CliOptions& opt) {
       ->type_name("4.1|2.2")
       ->default_str("4.1")
       ->group(og);
-  app.add_option("--inner", opt.inner, "Write the inner surface (.obj .ply .off)")->group(og);
+  app.add_option("--inner", opt.inner, "Write the inner surface (.obj .ply .off .stl)")->group(og);
   app.add_option("--report", opt.report,
                  "Write the JSON report here too (several inputs: a folder, one <stem>.json each)")
       ->group(og);

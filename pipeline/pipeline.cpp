@@ -420,9 +420,27 @@ ShellResult build_shell(const SurfaceMesh& mesh, const ShellOptions& options,
   return build_shell(make_surface(soup, source), options, control);
 }
 
-LoadedSurface load_level_set_surface(const std::string& vdb_path, const ShellOptions& options) {
-  // level_set_to_soup() checks the adaptivity.
-  return make_surface(level_set_to_soup(vdb_path, options.grid_name, options.adaptivity), vdb_path);
+LoadedSurface load_level_set_surface(const std::string& vdb_path, const ShellOptions& options,
+                                     RepairReport* repair) {
+  // volume_to_soup() checks the adaptivity.
+  const VolumeSurface volume =
+      volume_to_soup(vdb_path, options.grid_name, options.adaptivity, options.repair);
+  if (!options.repair) return make_surface(volume.soup, vdb_path);
+  RepairReport report;
+  LoadedSurface surface = load_repaired_surface(volume.soup, vdb_path, options, report);
+  report.grid = volume.where;
+  report.grid_class = volume.grid_class;
+  report.isovalue = volume.isovalue;
+  report.positive_inside = volume.positive_inside;
+  if (volume.grid_class != "level set" || volume.positive_inside) {
+    std::ostringstream notice;
+    notice << volume.where << " (class '" << volume.grid_class << "') was meshed at "
+           << volume.isovalue << ", its solid where the values are "
+           << (volume.positive_inside ? "larger" : "smaller");
+    surface.notices.insert(surface.notices.begin(), notice.str());
+  }
+  if (repair) *repair = report;
+  return surface;
 }
 
 ShellResult build_shell_from_level_set(const std::string& vdb_path, const ShellOptions& options,
@@ -431,6 +449,13 @@ ShellResult build_shell_from_level_set(const std::string& vdb_path, const ShellO
     throw InputError(
         "a .vdb input is its own level set: leave ShellOptions::level_set empty "
         "(--level-set)");
+  if (options.repair) {  // the fields are the repaired surface's own, as for a mesh file
+    RepairReport repair;
+    ShellResult r =
+        build_shell(load_level_set_surface(vdb_path, options, &repair), options, control);
+    r.repair = repair;
+    return r;
+  }
   ShellOptions with_level_set = options;
   with_level_set.level_set = vdb_path;
   return build_shell(load_level_set_surface(vdb_path, options), with_level_set, control);
@@ -531,6 +556,11 @@ std::string report_json(const ShellResult& r, const ReportFiles& files, double r
                    {"input_distance_max", p.input_distance_max},
                    {"input_distance_mean", p.input_distance_mean},
                    {"seconds", p.seconds}};
+    if (!p.grid.empty())
+      j["repair"]["volume"] = {{"grid", p.grid},
+                               {"class", p.grid_class},
+                               {"isovalue", p.isovalue},
+                               {"positive_inside", p.positive_inside}};
   }
   const MemoryEstimates& m = r.memory;
   const auto gib = [](std::size_t bytes) { return double(bytes) / kBytesPerGiB; };

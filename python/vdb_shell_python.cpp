@@ -483,7 +483,7 @@ PYBIND11_MODULE(vdb_shell, m) {
         write_released([&] { write_inner_surface(p, *result.result); });
       },
       "write_inner(path, result)\n\n"
-      "Writes the inner surface (.obj .ply .off) atomically. Raises InputError for an unknown "
+      "Writes the inner surface (.obj .ply .off .stl) atomically. Raises InputError for an unknown "
       "extension, ResourceError if the file cannot be written.",
       py::arg("path"), py::arg("result"));
   m.def(

@@ -9,7 +9,7 @@ packages=(
   libopenvdb-dev libboost-dev libtbb-dev libpng-dev
   libgtest-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev
   libopenvdb-tools gmsh tetgen chromium
-  python3-meshio python3-numpy python3-scipy python3-matplotlib
+  python3-meshio python3-numpy python3-scipy python3-matplotlib python3-openvdb
   python3-dev pybind11-dev python3-pytest
 )
 

@@ -234,13 +234,28 @@ struct VdbGridInfo {
   std::uint64_t checksum = 0;  ///< FNV-1a over (coord, value bits) of every active voxel
 };
 
-/// The zero crossing of the level set `grid_name` of `vdb_path` (empty: 'surface', else the
-/// first float level set) as polygons (OpenVDB volumeToMesh; quads and triangles, outward),
-/// world units. `adaptivity` in [0, 1]: 0 keeps every voxel-sized quad, larger values merge
-/// flat regions into fewer polygons. Pass the result through make_surface() (validate.h).
-/// \throw InputError for a missing file, a grid that is not a float level set, or no surface.
-PolygonSoup level_set_to_soup(const std::string& vdb_path, const std::string& grid_name,
-                              double adaptivity);
+/// The surface of a .vdb grid (volume_to_soup()).
+struct VolumeSurface {
+  PolygonSoup soup;              ///< quads and triangles facing outward, world units
+  std::string where;             ///< "grid 'NAME' of 'FILE'", for messages
+  std::string grid_class;        ///< "level set", "fog volume", "unknown", ...
+  double isovalue = 0.0;         ///< the value meshed
+  bool positive_inside = false;  ///< the solid is where the values exceed `isovalue`
+};
+
+/// The surface of the grid `grid_name` of `vdb_path` as polygons (OpenVDB volumeToMesh).
+/// `adaptivity` in [0, 1]: 0 keeps every voxel-sized quad, larger values merge flat regions
+/// into fewer polygons. Pass the soup through make_surface() (load_surface.h).
+/// Without `any_volume` (a .vdb input as it is): a float level set (empty name: 'surface', else
+/// the first), negative inside, meshed at its zero crossing. With `any_volume` (--repair): any
+/// float grid (empty name: as before, else the first fog volume, else the first float grid); a
+/// fog volume, or a grid of no class holding densities (background 0, values in [0, 1]), is
+/// meshed at 0.5, anything else at 0; the polygons face away from whichever side encloses
+/// the solid (a level set positive inside is accepted).
+/// \throw InputError for a missing file, a grid of the wrong type or class, a level set positive
+///        inside without `any_volume`, or no surface.
+VolumeSurface volume_to_soup(const std::string& vdb_path, const std::string& grid_name,
+                             double adaptivity, bool any_volume);
 
 /// Reads every grid of `path` with the OpenVDB API.
 /// \throw InputError if the file is missing or not a .vdb file.

@@ -43,6 +43,12 @@ struct RepairReport {
   double input_distance_max = 0.0;  ///< input vertices not swallowed -> repaired surface
   double input_distance_mean = 0.0;
   double seconds = 0.0;
+  /// A .vdb input (load_level_set_surface()): the grid meshed (empty for polygons), its class,
+  /// the value meshed and whether its solid is where the values exceed it.
+  std::string grid;
+  std::string grid_class;
+  double isovalue = 0.0;
+  bool positive_inside = false;
 };
 
 /// The repaired surface of `input` (polygons facing outward), `name` naming it in messages.

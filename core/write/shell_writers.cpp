@@ -368,6 +368,20 @@ void write_ply(std::ostream& os, const SurfaceMesh& mesh) {
   out.flush();
 }
 
+/// ASCII STL, coordinates to full precision: a reader that welds corners by position gets the
+/// mesh's vertices back exactly.
+void write_stl(std::ostream& os, const SurfaceMesh& mesh) {
+  TextOut out(os);
+  out.str("solid vdb_shell\n");
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+    out.str("facet normal ").point(normalized(face_normal_area(mesh, f))).str("\nouter loop\n");
+    for (std::uint32_t v : mesh.triangles[f]) out.str("vertex ").point(mesh.points[v]).ch('\n');
+    out.str("endloop\nendfacet\n");
+  }
+  out.str("endsolid vdb_shell\n");
+  out.flush();
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
@@ -450,7 +464,7 @@ void write_tet_mesh(const std::string& path, const TetMesh& mesh, TetFormat form
 }
 
 const std::vector<std::string>& surface_output_extensions() {
-  static const std::vector<std::string> kExtensions = {".obj", ".ply", ".off"};
+  static const std::vector<std::string> kExtensions = {".obj", ".ply", ".off", ".stl"};
   return kExtensions;
 }
 
@@ -460,6 +474,7 @@ void write_surface(const std::string& path, const SurfaceMesh& mesh) {
   if (ext == ".obj") writer = write_obj;
   if (ext == ".ply") writer = write_ply;
   if (ext == ".off") writer = write_off;
+  if (ext == ".stl") writer = write_stl;
   if (writer == nullptr) {
     throw InputError("cannot tell the surface format of " + path + " from its extension" +
                      (ext.empty() ? std::string() : " '" + ext + "'") + ": use one of " +

@@ -193,8 +193,14 @@ ShellResult build_shell(const SurfaceMesh& mesh, const ShellOptions& options,
                         const RunControl& control = {}, const std::string& source = "surface mesh");
 
 /// The zero crossing of a .vdb level set (options.grid_name, options.adaptivity) as a validated
-/// surface: the surface a level set input is shelled on.
-LoadedSurface load_level_set_surface(const std::string& vdb_path, const ShellOptions& options);
+/// surface: the surface a level set input is shelled on. With options.repair the grid may be any
+/// float volume — a level set of either sign, a fog volume (meshed at 0.5), a grid of no class
+/// (volume_to_soup()) — and its surface is repaired as load_repaired_surface() does; `repair`
+/// (if given) gets what the repair did and which grid, class and value were meshed.
+/// \throw InputError naming the file, the grid and the fix (a level set positive inside, a grid
+///        that is not a level set, a surface that is not closed: each suggests --repair).
+LoadedSurface load_level_set_surface(const std::string& vdb_path, const ShellOptions& options,
+                                     RepairReport* repair = nullptr);
 
 /// `soup` (any polygons: holes, seams, overlaps, self-intersections) rebuilt as a closed,
 /// 2-manifold surface through a volume (repair_surface(), options.repair_voxel_size or the
@@ -206,7 +212,8 @@ LoadedSurface load_repaired_surface(const PolygonSoup& soup, const std::string& 
                                     const ShellOptions& options, RepairReport& report);
 
 /// Meshes the level set of `vdb_path` (load_level_set_surface()) and shells it, using the same
-/// level set as the distance field (options.level_set must be empty).
+/// level set as the distance field (options.level_set must be empty). With options.repair, the
+/// volume's repaired surface is shelled in fields of its own (result.repair says how).
 ShellResult build_shell_from_level_set(const std::string& vdb_path, const ShellOptions& options,
                                        const RunControl& control = {});
 

@@ -210,10 +210,12 @@ TEST(CliRepair, AHoleIsRefusedWithTheHintAndRepairedWithIt) {
   EXPECT_EQ(nlohmann::json::parse(test::read_text(dir.file("s.json")))["repair"]["voxel_size"],
             0.04);
 
-  // Repair options without --repair, and --repair of a level set: contradictions, exit 2.
+  // Repair options without --repair, and a repaired surface of no known format: exit 2.
   EXPECT_EQ(cli({in, "--repair-closing", "3"}).code, 2);
   EXPECT_EQ(cli({in, "--repaired", dir.file("x.obj")}).code, 2);
-  EXPECT_EQ(cli({dir.file("x.vdb"), "--repair"}).code, 2);
+  const InProcess step = cli({in, "--repair", "--repaired", dir.file("x.step")});
+  EXPECT_EQ(step.code, 2);
+  EXPECT_NE(step.err.find(".obj, .ply, .off or .stl"), std::string::npos) << step.err;
 }
 
 TEST(CliRepair, ACleanInputIsKeptAndGivesThePlainShell) {

@@ -700,3 +700,92 @@ def test_repair_rebuilds_a_holed_sphere(sphere):
     assert result.report["input"]["faces"] == np.unique(result.source_triangle).size
     with pytest.raises(vdb_shell.InputError, match="repair"):
         vdb_shell.build_shell(v, holed, repair="yes")
+
+
+def sphere_volumes(tmp_path):
+    """A sphere (radius 0.5, centre (0.1, 0, 0), voxel 0.04) written with pyopenvdb as OpenVDB's
+    level set, as a level set of the other sign (positive inside, background negative), as a fog
+    volume (density 1 inside, 0 outside, 0.5 on the sphere) and as the same densities in a grid of
+    no class. Returns {kind: (path, grid name)}."""
+    vdb = pytest.importorskip("pyopenvdb")
+    ls = vdb.createLevelSetSphere(radius=0.5, center=(0.1, 0, 0), voxelSize=0.04, halfWidth=3.0)
+    ls.name = "surface"
+    band = ls.background
+    negated = vdb.FloatGrid(-band)
+    negated.transform, negated.name = ls.transform, "surface"
+    negated.gridClass = vdb.GridClass.LEVEL_SET
+    acc = negated.getAccessor()
+    for it in ls.citerOnValues():
+        acc.setValueOn(it.min, -it.value)
+    negated.signedFloodFill()
+    fog = ls.deepCopy()
+    fog.mapAll(lambda v: min(1.0, max(0.0, 0.5 - 0.5 * v / band)))
+    fog.background, fog.name, fog.gridClass = 0.0, "density", vdb.GridClass.FOG_VOLUME
+    densities = fog.deepCopy()
+    densities.name, densities.gridClass = "densities", vdb.GridClass.UNKNOWN
+    paths = {}
+    for kind, grid in (("level set", ls), ("positive inside", negated), ("fog", fog),
+                       ("densities", densities)):
+        path = tmp_path / (kind.replace(" ", "_") + ".vdb")
+        vdb.write(str(path), grids=[grid])
+        paths[kind] = (path, grid.name)
+    return paths
+
+
+def distance_to_sphere(points):
+    return np.abs(np.linalg.norm(points - np.array([0.1, 0, 0]), axis=1) - 0.5)
+
+
+@pytest.mark.parametrize("kind,grid_class,isovalue,positive_inside", [
+    ("level set", "level set", 0.0, False),
+    ("positive inside", "level set", 0.0, True),
+    ("fog", "fog volume", 0.5, True),
+    ("densities", "unknown", 0.5, True),
+])
+def test_repair_meshes_any_volume(tmp_path, kind, grid_class, isovalue, positive_inside):
+    """repair=True shells a .vdb of either sign convention, a fog volume and densities of no class:
+    the surface meshed lies on the sphere the grids hold (within a voxel, measured here), the
+    shell's tets are positive and the report says which value of which grid was meshed. Without
+    repair only OpenVDB's convention is accepted, and the refusal suggests repair."""
+    path, name = sphere_volumes(tmp_path)[kind]
+    result = vdb_shell.build_shell_from_level_set(path, resolution=32, repair=True)
+    n = result.report["input"]["vertices"]
+    assert distance_to_sphere(result.points[:n]).max() < 0.04
+    assert np.all(tet_volumes(result.points, result.tets) > 0)
+    assert np.unique(result.source_triangle).size == result.report["input"]["faces"]
+    assert result.report["shell"]["coverage"] > 0.9
+    volume = result.report["repair"]["volume"]
+    assert volume == {"grid": f"grid '{name}' of '{path}'", "class": grid_class,
+                      "isovalue": isovalue, "positive_inside": positive_inside}
+    assert same_shell(result, vdb_shell.build_shell_from_level_set(path, resolution=32,
+                                                                   repair=True, threads=1))
+    if kind == "level set":
+        assert vdb_shell.build_shell_from_level_set(path, resolution=32).report["shell"]["valid"]
+        return
+    refusal = {"positive inside": "is positive inside", "fog": "holds no float level set",
+               "densities": "holds no float level set"}[kind]
+    with pytest.raises(vdb_shell.InputError, match=refusal + ".*rerun with repair"):
+        vdb_shell.build_shell_from_level_set(path, resolution=32)
+
+
+def test_repair_of_a_volume_through_the_command(tmp_path):
+    """`vdb_shell FOG.vdb --repair` writes the shell and the repaired surface (.stl read back as
+    the same surface); without --repair it exits 2 naming the grid's class and writes nothing."""
+    cli = os.environ.get("VDB_SHELL_BIN")
+    if not cli or not os.access(cli, os.X_OK):
+        pytest.skip("VDB_SHELL_BIN does not name the executable")
+    path, _ = sphere_volumes(tmp_path)["fog"]
+    shell, stl, obj = tmp_path / "s.vtu", tmp_path / "r.stl", tmp_path / "r.obj"
+    refused = subprocess.run([cli, str(path), "--grid", "density", "-r", "32", "-o", str(shell)],
+                             capture_output=True, text=True)
+    assert refused.returncode == 2
+    assert "class is 'fog volume'" in refused.stderr and "--repair" in refused.stderr
+    assert not shell.exists()
+    for repaired in (stl, obj):
+        run = subprocess.run([cli, str(path), "--repair", "-r", "32", "-o", str(shell), "-q",
+                              "--repaired", str(repaired)], capture_output=True, text=True)
+        assert run.returncode == 0, run.stderr
+    a, b = vdb_shell.load_surface(stl), vdb_shell.load_surface(obj)
+    assert len(a[1]) == len(b[1]) and len(a[0]) == len(b[0])
+    assert np.array_equal(np.sort(a[0], axis=0), np.sort(b[0], axis=0))
+    assert distance_to_sphere(a[0]).max() < 0.04

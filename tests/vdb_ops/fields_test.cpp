@@ -498,7 +498,7 @@ TEST(FieldsVdb, CorruptFilesAreBadInputNotACrash) {
     const std::string path = dir.file("case" + std::to_string(k) + ".vdb");
     test::write_text(path, cases[k]);
     try {
-      EXPECT_FALSE(level_set_to_soup(path, "", 0.0).polygons.empty()) << k;
+      EXPECT_FALSE(volume_to_soup(path, "", 0.0, false).soup.polygons.empty()) << k;
     } catch (const InputError& e) {
       EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
       ++refused;

@@ -131,7 +131,7 @@ std::unique_ptr<Fields> fields_from_level_set(const std::string& vdb_path,
   }
   const auto t0 = std::chrono::steady_clock::now();
   std::string where;
-  FloatGrid::Ptr grid = read_level_set_grid(vdb_path, grid_name, where);
+  FloatGrid::Ptr grid = read_float_grid(vdb_path, grid_name, GridKinds::kLevelSet, where);
   if (!grid->transform().isLinear()) {
     throw InputError(where + " has a non-linear (frustum) transform; resample it to a linear one");
   }

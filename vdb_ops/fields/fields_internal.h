@@ -11,7 +11,7 @@
 //   derived.cpp     finish_fields(): the flux (and gradient) grids, the Fields object
 //   build.cpp       build_fields(), fields_from_level_set(), the Fields accessors
 //   probe.cpp       Fields::probe(): trilinear sampling for the tracer
-//   vdb_io.cpp      .vdb reading and writing, level_set_to_soup()
+//   vdb_io.cpp      .vdb reading and writing, volume_to_soup()
 // Space: "index space" is OpenVDB's voxel index space (voxel centres at integer coordinates);
 // lengths are world units unless a name says voxels.
 #pragma once
@@ -160,11 +160,19 @@ using GridSelector = std::function<std::string(const openvdb::GridPtrVec& metas)
 ///        ResourceError if the child cannot be started.
 openvdb::GridPtrVecPtr read_vdb_isolated(const std::string& path, const GridSelector& select);
 
-/// Reads the float level set `grid_name` of `vdb_path` (empty name: 'surface', else the first
-/// float level set) and checks its type and class. `where` names it for messages.
+/// Which grids read_float_grid() takes.
+enum class GridKinds {
+  kLevelSet,  ///< float level sets only
+  kAnyFloat,  ///< any float grid (a level set of either sign, a fog volume, ...)
+};
+
+/// Reads the float grid `grid_name` of `vdb_path` (empty name: 'surface' if it is a float level
+/// set, else the first float level set; with kAnyFloat, else the first float fog volume, else
+/// the first float grid) and checks its type (and, with kLevelSet, its class: `hint` ends that
+/// message). `where` names it for messages.
 /// \throw InputError naming the file, the grid and the fix.
-FloatGrid::Ptr read_level_set_grid(const std::string& vdb_path, const std::string& grid_name,
-                                   std::string& where);
+FloatGrid::Ptr read_float_grid(const std::string& vdb_path, const std::string& grid_name,
+                               GridKinds kinds, std::string& where, const std::string& hint = {});
 
 }  // namespace fields_detail
 

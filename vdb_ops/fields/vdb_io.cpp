@@ -1,5 +1,5 @@
 // vdb_io.cpp — .vdb files: write_grids() (content-derived header UUID), reading grid
-// descriptions, reading a level set grid, and level_set_to_soup() (OpenVDB volumeToMesh).
+// descriptions, reading a float grid, and volume_to_soup() (OpenVDB volumeToMesh).
 #include "vdb_ops/fields/fields_internal.h"
 
 #include <openvdb/io/File.h>
@@ -342,8 +342,8 @@ void require_readable(const std::string& path) {
   }
 }
 
-FloatGrid::Ptr read_level_set_grid(const std::string& vdb_path, const std::string& grid_name,
-                                   std::string& where) {
+FloatGrid::Ptr read_float_grid(const std::string& vdb_path, const std::string& grid_name,
+                               GridKinds kinds, std::string& where, const std::string& hint) {
   const auto choose = [&](const openvdb::GridPtrVec& metas) {
     std::string names;
     for (const auto& m : metas) names += (names.empty() ? "'" : ", '") + m->getName() + "'";
@@ -358,21 +358,31 @@ FloatGrid::Ptr read_level_set_grid(const std::string& vdb_path, const std::strin
       }
       return grid_name;
     }
-    auto is_float_ls = [](const openvdb::GridBase& g) {
-      return g.isType<FloatGrid>() && g.getGridClass() == openvdb::GRID_LEVEL_SET;
+    // 'surface' if it is a float level set, else the first float level set, else (any
+    // volume) the first float fog volume, else the first float grid.
+    const auto first = [&](auto&& accept) {
+      for (const auto& m : metas)
+        if (m->template isType<FloatGrid>() && accept(*m)) return m->getName();
+      return std::string();
     };
-    std::string name;
-    for (const auto& m : metas) {
-      if (m->getName() == "surface" && is_float_ls(*m)) name = "surface";
-    }
-    for (const auto& m : metas) {
-      if (name.empty() && is_float_ls(*m)) name = m->getName();
+    const auto level_set = [](const openvdb::GridBase& g) {
+      return g.getGridClass() == openvdb::GRID_LEVEL_SET;
+    };
+    std::string name =
+        first([&](const openvdb::GridBase& g) { return g.getName() == "surface" && level_set(g); });
+    if (name.empty()) name = first(level_set);
+    if (name.empty() && kinds == GridKinds::kAnyFloat) {
+      name = first(
+          [](const openvdb::GridBase& g) { return g.getGridClass() == openvdb::GRID_FOG_VOLUME; });
+      if (name.empty()) name = first([](const openvdb::GridBase&) { return true; });
     }
     if (name.empty()) {
-      throw InputError("'" + vdb_path + "' holds no float level set grid (its grids: " +
-                       (names.empty() ? "none" : names) +
+      throw InputError("'" + vdb_path + "' holds no float " +
+                       (kinds == GridKinds::kAnyFloat ? "grid" : "level set grid") +
+                       " (its grids: " + (names.empty() ? "none" : names) +
                        "); pass --grid NAME, and if that grid is a signed distance field, "
-                       "set its grid class to level set");
+                       "set its grid class to level set" +
+                       hint);
     }
     return name;
   };
@@ -382,41 +392,79 @@ FloatGrid::Ptr read_level_set_grid(const std::string& vdb_path, const std::strin
   FloatGrid::Ptr grid = openvdb::gridPtrCast<FloatGrid>(base);
   where = "grid '" + chosen + "' of '" + vdb_path + "'";
   if (!grid) {
-    throw InputError(where + " holds " + base->valueType() +
-                     " values; a level set must be a float grid");
+    throw InputError(where + " holds " + base->valueType() + " values; a " +
+                     (kinds == GridKinds::kAnyFloat ? "volume" : "level set") +
+                     " must be a float grid");
   }
-  if (grid->getGridClass() != openvdb::GRID_LEVEL_SET) {
+  if (kinds == GridKinds::kLevelSet && grid->getGridClass() != openvdb::GRID_LEVEL_SET) {
     throw InputError(where + " is not a level set (its class is '" +
                      openvdb::GridBase::gridClassToString(grid->getGridClass()) +
                      "'); if it holds signed distances (negative inside), try setting the grid "
-                     "class to level set");
+                     "class to level set" +
+                     hint);
   }
   return grid;
 }
 
 }  // namespace fields_detail
 
-PolygonSoup level_set_to_soup(const std::string& vdb_path, const std::string& grid_name,
-                              double adaptivity) {
+VolumeSurface volume_to_soup(const std::string& vdb_path, const std::string& grid_name,
+                             double adaptivity, bool any_volume) {
   init_openvdb();
   require_readable(vdb_path);
   if (!(adaptivity >= 0.0 && adaptivity <= 1.0))
     throw InputError("--adaptivity must lie in [0, 1]; got " + format_double(adaptivity));
-  std::string where;
-  const FloatGrid::Ptr grid = read_level_set_grid(vdb_path, grid_name, where);
+  const std::string repair_hint = " — or rerun with --repair to mesh it as it is";
+  VolumeSurface out;
+  const FloatGrid::Ptr grid =
+      read_float_grid(vdb_path, grid_name, any_volume ? GridKinds::kAnyFloat : GridKinds::kLevelSet,
+                      out.where, repair_hint);
+  const openvdb::GridClass grid_class = grid->getGridClass();
+  out.grid_class = openvdb::GridBase::gridClassToString(grid_class);
+  // A fog volume's surface is at density 0.5; so is that of a grid of no class whose values are
+  // densities (background 0, all in [0, 1]). Anything else is a distance: its zero crossing.
+  bool densities = grid_class == openvdb::GRID_FOG_VOLUME;
+  if (grid_class != openvdb::GRID_LEVEL_SET && !densities) {
+    densities = grid->background() == 0.0f;
+    for (auto it = grid->cbeginValueOn(); it && densities; ++it)
+      densities = *it >= 0.0f && *it <= 1.0f;
+  }
+  out.isovalue = densities ? 0.5 : 0.0;
   std::vector<openvdb::Vec3s> points;
   std::vector<openvdb::Vec3I> triangles;
   std::vector<openvdb::Vec4I> quads;
-  openvdb::tools::volumeToMesh(*grid, points, triangles, quads, 0.0, adaptivity);
-  PolygonSoup soup;
+  openvdb::tools::volumeToMesh(*grid, points, triangles, quads, out.isovalue, adaptivity);
+  PolygonSoup& soup = out.soup;
   soup.points.reserve(points.size());
   for (const openvdb::Vec3s& p : points) soup.points.push_back({p[0], p[1], p[2]});
-  // OpenVDB's polygons face into the negative (inside) region: reverse them to face outward.
+  // volumeToMesh's polygons face into the region below the iso-value for a level set, above it
+  // for any other class: reversed, they face out of it.
   for (const openvdb::Vec3I& t : triangles) soup.polygons.push_back({t[2], t[1], t[0]});
   for (const openvdb::Vec4I& q : quads) soup.polygons.push_back({q[3], q[2], q[1], q[0]});
-  if (soup.polygons.empty())
-    throw InputError(where + " has no zero crossing: its level set holds no surface to mesh");
-  return soup;
+  if (soup.polygons.empty()) {
+    throw InputError(out.where + " has no crossing of " + format_double(out.isovalue) +
+                     ": it holds no surface to mesh");
+  }
+  // The enclosed volume (fans of the polygons) says which side the solid is on.
+  double volume6 = 0.0;
+  for (const std::vector<std::int64_t>& poly : soup.polygons) {
+    const Vec3d& o = soup.points[static_cast<std::size_t>(poly[0])];
+    for (std::size_t i = 1; i + 1 < poly.size(); ++i)
+      volume6 += dot(o, cross(soup.points[static_cast<std::size_t>(poly[i])],
+                              soup.points[static_cast<std::size_t>(poly[i + 1])]));
+  }
+  out.positive_inside = (grid_class == openvdb::GRID_LEVEL_SET) == (volume6 < 0.0);
+  if (volume6 < 0.0) {
+    if (!any_volume) {
+      throw InputError(out.where +
+                       " is positive inside: the region its zero crossing encloses holds phi > "
+                       "0; vdb_shell needs OpenVDB's convention, negative inside: negate the "
+                       "grid" +
+                       repair_hint);
+    }
+    for (std::vector<std::int64_t>& poly : soup.polygons) std::reverse(poly.begin(), poly.end());
+  }
+  return out;
 }
 
 }  // namespace vdb_shell

@@ -22,6 +22,7 @@
 
 #include "core/base/errors.h"
 #include "core/base/tet_mesh.h"
+#include "core/read/load_surface.h"
 #include "core/write/atomic_file.h"
 #include "core/write/shell_writers.h"
 #include "tests/test_support.h"
@@ -326,7 +327,7 @@ TEST(WritersTest, UnknownExtensionThrowsInputErrorListingKnownOnes) {
     }
   }
   EXPECT_THROW(tet_format_from_path("shell.msh", 40), InputError);
-  EXPECT_THROW(write_surface("surface.stl", SurfaceMesh{}), InputError);
+  EXPECT_THROW(write_surface("surface.step", SurfaceMesh{}), InputError);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -445,6 +446,21 @@ TEST(WritersTest, SurfacesRoundTripThroughMeshio) {
       for (int k = 0; k < 3; ++k) EXPECT_EQ(tris[f][k], surface.triangles[f][k]) << f;
     }
   }
+}
+
+TEST(WritersTest, StlSurfaceReadsBackWithTheSameCorners) {
+  // STL stores corners, not vertices: read back (corners welded by position), every triangle
+  // has the same corners in the same order, to the last bit.
+  SurfaceMesh surface = cube_surface(cube_5_tets(false));
+  for (Vec3d& p : surface.points) p = p * (1.0 / 3.0) + Vec3d{0.1, -1e-7, 12345.678};
+  TempDir dir;
+  write_surface(dir.file("s.stl"), surface);
+  const SurfaceMesh back = load_surface(dir.file("s.stl")).mesh;
+  ASSERT_EQ(back.triangles.size(), surface.triangles.size());
+  EXPECT_EQ(back.points.size(), surface.points.size());
+  for (std::size_t f = 0; f < surface.triangles.size(); ++f)
+    for (int k = 0; k < 3; ++k)
+      EXPECT_EQ(back.points[back.triangles[f][k]], surface.points[surface.triangles[f][k]]) << f;
 }
 
 TEST(WritersTest, SurfaceKeepsDegenerateTriangles) {
