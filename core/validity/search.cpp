@@ -87,25 +87,50 @@ class ShellSearch {
       if (std::max(margin, safe_margin) < (sector ? kSectorMargin : kFoldMargin))
         folded_.push_back(static_cast<std::uint32_t>(v));
     }
-    // Folded vertices stay on the surface. A face with three folded corners keeps a prism as one
-    // tet to a cap point of its own, at the floor depth below its centroid.
-    std::vector<char> folded(n, 0);
+    floor_fraction_ = options.floor_fraction;
+    update_caps();
+  }
+
+  /// Keeps v on the surface from now on (t_v = 0, as a folded vertex) and returns true, unless
+  /// it already is. The last resort for a sector of a folded vertex whose thinnest prisms still
+  /// offend: two sectors whose directions cross overlap at any depth.
+  bool keep_on_surface(State& s, std::uint32_t v) {
+    const auto at = std::lower_bound(folded_.begin(), folded_.end(), v);
+    if (at != folded_.end() && *at == v) return false;
+    folded_.insert(at, v);
+    s.t[v] = 0;
+    s.welded[v] = 0;
+    update_caps();
+    return true;
+  }
+
+  /// Folded vertices stay on the surface. A face with three folded corners keeps a prism as one
+  /// tet to a cap point of its own, at the floor depth below its centroid.
+  void update_caps() {
+    std::vector<char> folded(full_.size(), 0);
     for (std::uint32_t v : folded_) folded[v] = 1;
-    for (std::uint32_t f = 0; f < surface.triangles.size(); ++f) {
-      const Triangle& tri = surface.triangles[f];
+    caps_ = ShellInput{};
+    for (std::uint32_t f = 0; f < surface_.triangles.size(); ++f) {
+      const Triangle& tri = surface_.triangles[f];
       if (!folded[tri[0]] || !folded[tri[1]] || !folded[tri[2]]) continue;
-      const std::array<Vec3d, 3> p = {surface.points[tri[0]], surface.points[tri[1]],
-                                      surface.points[tri[2]]};
+      const std::array<Vec3d, 3> p = {surface_.points[tri[0]], surface_.points[tri[1]],
+                                      surface_.points[tri[2]]};
       const double edge =
           std::min({distance(p[0], p[1]), distance(p[1], p[2]), distance(p[2], p[0])});
       caps_.cap_faces.push_back(f);
       caps_.cap_points.push_back((p[0] + p[1] + p[2]) / 3.0 -
-                                 normalized(face_normal_area(surface, f)) *
-                                     (options.floor_fraction * edge));
+                                 normalized(face_normal_area(surface_, f)) *
+                                     (floor_fraction_ * edge));
     }
   }
 
-  /// Vertices whose incident faces admit no common inward direction (none found), in order.
+  /// Whether v is a sector of a folded vertex (InnerVertices::constraints, sectors.h).
+  bool is_sector(std::uint32_t v) const {
+    return v < start_.constraints.size() && !start_.constraints[v].empty();
+  }
+
+  /// Vertices kept on the surface (t_v = 0): those whose incident faces admit no common inward
+  /// direction, and sectors given up by keep_on_surface(); ascending.
   const std::vector<std::uint32_t>& folded() const { return folded_; }
   /// Faces with three folded corners and their cap points (ShellInput::cap_faces).
   std::size_t caps() const { return caps_.cap_faces.size(); }
@@ -394,7 +419,8 @@ class ShellSearch {
   std::vector<std::uint32_t> group_key_;  ///< per group: its smallest welded vertex (initial)
   std::vector<double> group_depth_;       ///< per group: its welded members' largest depth
   IndexLists faces_;                      ///< vertex -> its faces
-  std::vector<std::uint32_t> folded_;     ///< on the surface throughout (t_v = 0)
+  std::vector<std::uint32_t> folded_;     ///< on the surface (t_v = 0), ascending
+  double floor_fraction_ = 0;             ///< ValidityOptions::floor_fraction
   std::vector<int> drops_;                ///< per vertex: how often its floor was lowered
   ShellInput caps_;                       ///< cap_faces and cap_points only
   // position(v, t) of the last build, by vertex (t = -1: none yet).
@@ -614,10 +640,31 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
       if (!progress) {
         // The floors are as low as they go: the floor configuration itself must be invalid.
         const ShellInput in = search.build(search.floor_state(), members);
-        const ShellCheckResult c =
-            check_shell(surface, assemble_shell(surface, in, no_quality).mesh);
+        const AssembleResult floor = assemble_shell(surface, in, no_quality);
+        const ShellCheckResult c = check_shell(surface, floor.mesh, check_options);
+        // Sectors of a folded vertex among its offenders go on the surface, and the search goes
+        // on (each at most once); anything else offending at the floor is a failure.
+        if (!c.valid()) {
+          std::vector<std::uint32_t> offending;
+          for (const auto& pair : c.first_overlapping_pairs)
+            for (const std::uint32_t t : pair) offending.push_back(t);
+          for (const auto* list :
+               {&c.first_inverted_tets, &c.first_zero_volume_tets, &c.first_leaking_tets})
+            offending.insert(offending.end(), list->begin(), list->end());
+          for (const std::uint32_t t : offending)
+            for (const std::uint32_t v : surface.triangles[floor.mesh.source_triangle[t]])
+              if (search.is_sector(v) && search.keep_on_surface(s, v)) {
+                lowered[v] = 1;
+                progress = true;
+              }
+        }
+        if (progress) {
+          search.faces_around(lowered, seeds);
+          continue;
+        }
         out.floor_valid = c.valid();
-        if (!out.floor_valid) out.floor_problems = describe_problems(c);
+        if (!out.floor_valid)  // the first few of each kind
+          out.floor_problems = describe_problems(check_shell(surface, floor.mesh));
         out.stalled = true;
         break;
       }

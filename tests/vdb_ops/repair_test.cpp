@@ -277,5 +277,22 @@ TEST(Repair, SharedBrokenMeshesGiveValidShells) {
   }
 }
 
+TEST(Repair, CrossingSectorsOfTheRebuiltBeetleGoOnTheSurface) {
+  // The beetle rebuilt at 96^3 has folded vertices whose sectors' directions cross: their
+  // prisms overlap at any depth, the floor's too, so the search keeps those sectors on the
+  // surface (search.h) rather than failing. Checked independently.
+  const auto dir = test::shared_meshes_dir();
+  if (dir.empty()) GTEST_SKIP() << "../shared/meshes is absent";
+  const Repaired r = repair(read_polygon_soup((dir / "beetle.obj").string()), 96);
+  ShellOptions options;
+  options.fields.resolution = 96;
+  const ShellResult shell = build_shell(r.surface, options);
+  EXPECT_GE(shell.validity.sectors, 2u);
+  EXPECT_GE(shell.validity.on_surface_vertices, 1u);
+  EXPECT_EQ(
+      test::independent_shell_problems(r.surface.mesh, shell.mesh, 2 * shell.validity.sectors), "");
+  EXPECT_GT(test::independent_coverage(r.surface.mesh, shell.mesh), 0.6);
+}
+
 }  // namespace
 }  // namespace vdb_shell
