@@ -322,8 +322,7 @@ PolygonSoup repair_surface(const PolygonSoup& input, const RepairOptions& option
     to_core[v] = to_outside[v] >= rv + 0.5f ? 0.0f : static_cast<float>(kFar);
   squared_distance_transform(dense, to_core, nearest);
   std::vector<std::uint32_t>().swap(nearest);
-  // The signed distance, world units, the surface at 0: the closed solid and the thin parts,
-  // smoothed once (1-2-1 along each axis) so that where the two meet no crease folds the mesh.
+  // The signed distance, world units, the surface at 0: the closed solid and the thin parts.
   std::vector<float> phi(dense.size());
   std::size_t inside = 0;
   for (std::size_t v = 0; v < dense.size(); ++v) {
@@ -339,60 +338,75 @@ PolygonSoup repair_surface(const PolygonSoup& input, const RepairOptions& option
     throw InputError(name + ": nothing solid is left after closing by " +
                      format_double(options.closing) +
                      " voxels (the input is degenerate: all its points on a line or a point)");
-  for (int axis = 0; axis < 3; ++axis) {
-    const std::size_t stride = axis == 0   ? 1
-                               : axis == 1 ? std::size_t(dense.n[0])
-                                           : std::size_t(dense.n[0]) * dense.n[1];
-    std::vector<float> line(dense.n[axis]);
-    int c[3];
-    const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
-    for (c[a2] = 0; c[a2] < dense.n[a2]; ++c[a2])
-      for (c[a1] = 0; c[a1] < dense.n[a1]; ++c[a1]) {
-        c[axis] = 0;
-        const std::size_t first = dense.index(c[0], c[1], c[2]);
-        for (int q = 0; q < dense.n[axis]; ++q) line[q] = phi[first + q * stride];
-        for (int q = 1; q + 1 < dense.n[axis]; ++q)
-          phi[first + q * stride] = 0.25f * (line[q - 1] + 2.0f * line[q] + line[q + 1]);
-      }
-  }
-  const float background = 3.0f * hf;
-  FloatGrid::Ptr sdf = FloatGrid::create(background);
-  sdf->setTransform(xform->copy());
-  sdf->setGridClass(openvdb::GRID_LEVEL_SET);
-  {
-    openvdb::FloatGrid::Accessor out = sdf->getAccessor();
-    for (int k = 0; k < dense.n[2]; ++k)
-      for (int j = 0; j < dense.n[1]; ++j)
-        for (int i = 0; i < dense.n[0]; ++i) {
-          const float value = phi[dense.index(i, j, k)];
-          if (std::abs(value) < background)
-            out.setValue(openvdb::Coord(i, j, k), value);
-          else if (value < 0.0f)
-            out.setValueOff(openvdb::Coord(i, j, k), -background);
+  // Smoothed (1-2-1 along each axis) only if the mesh of the distance as it is has a defect:
+  // where the closed solid and a thin part meet, a crease can fold it. Smoothing also pulls the
+  // rims of thin parts in by voxels, so it is the fallback, not the rule.
+  const auto smooth = [&] {
+    for (int axis = 0; axis < 3; ++axis) {
+      const std::size_t stride = axis == 0   ? 1
+                                 : axis == 1 ? std::size_t(dense.n[0])
+                                             : std::size_t(dense.n[0]) * dense.n[1];
+      std::vector<float> line(dense.n[axis]);
+      int c[3];
+      const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
+      for (c[a2] = 0; c[a2] < dense.n[a2]; ++c[a2])
+        for (c[a1] = 0; c[a1] < dense.n[a1]; ++c[a1]) {
+          c[axis] = 0;
+          const std::size_t first = dense.index(c[0], c[1], c[2]);
+          for (int q = 0; q < dense.n[axis]; ++q) line[q] = phi[first + q * stride];
+          for (int q = 1; q + 1 < dense.n[axis]; ++q)
+            phi[first + q * stride] = 0.25f * (line[q - 1] + 2.0f * line[q] + line[q + 1]);
         }
-  }
-  std::vector<float>().swap(phi);
-
+    }
+  };
+  const auto to_grid = [&] {
+    const float background = 3.0f * hf;
+    FloatGrid::Ptr sdf = FloatGrid::create(background);
+    sdf->setTransform(xform->copy());
+    sdf->setGridClass(openvdb::GRID_LEVEL_SET);
+    {
+      openvdb::FloatGrid::Accessor out = sdf->getAccessor();
+      for (int k = 0; k < dense.n[2]; ++k)
+        for (int j = 0; j < dense.n[1]; ++j)
+          for (int i = 0; i < dense.n[0]; ++i) {
+            const float value = phi[dense.index(i, j, k)];
+            if (std::abs(value) < background)
+              out.setValue(openvdb::Coord(i, j, k), value);
+            else if (value < 0.0f)
+              out.setValueOff(openvdb::Coord(i, j, k), -background);
+          }
+    }
+    return sdf;
+  };
   // Meshed slightly off zero: whole-voxel distances put exact zeros on grid points, where the
   // iso-surface would collapse triangles. Should the mesh still hold a defect (a zero-area
-  // triangle, two faces crossing), the next of a few nearby iso-values is tried.
+  // triangle, two faces crossing), the next of a few nearby iso-values is tried, and then the
+  // same once the distance is smoothed.
   std::vector<openvdb::Vec3s> points;
   std::vector<openvdb::Vec3I> triangles;
   std::vector<openvdb::Vec4I> quads;
   PolygonSoup soup;
-  for (const double iso : {1e-3, 0.0137, 0.0291, -0.0113, 0.0457}) {
-    points.clear();
-    triangles.clear();
-    quads.clear();
-    openvdb::tools::volumeToMesh(*sdf, points, triangles, quads, iso * h, options.adaptivity);
-    soup = PolygonSoup{};
-    soup.points.reserve(points.size());
-    for (const openvdb::Vec3s& p : points) soup.points.push_back({p[0], p[1], p[2]});
-    // volumeToMesh's polygons face into the negative (inside) region: reverse them.
-    for (const openvdb::Vec3I& t : triangles) soup.polygons.push_back({t[2], t[1], t[0]});
-    for (const openvdb::Vec4I& q : quads) soup.polygons.push_back({q[3], q[2], q[1], q[0]});
-    if (find_surface_problems(soup).empty()) break;
+  FloatGrid::Ptr sdf;
+  bool clean = false;
+  for (int pass = 0; pass < 2 && !clean; ++pass) {
+    if (pass == 1) smooth();
+    sdf = to_grid();
+    for (const double iso : {1e-3, 0.0137, 0.0291, -0.0113, 0.0457}) {
+      points.clear();
+      triangles.clear();
+      quads.clear();
+      openvdb::tools::volumeToMesh(*sdf, points, triangles, quads, iso * h, options.adaptivity);
+      soup = PolygonSoup{};
+      soup.points.reserve(points.size());
+      for (const openvdb::Vec3s& p : points) soup.points.push_back({p[0], p[1], p[2]});
+      // volumeToMesh's polygons face into the negative (inside) region: reverse them.
+      for (const openvdb::Vec3I& t : triangles) soup.polygons.push_back({t[2], t[1], t[0]});
+      for (const openvdb::Vec4I& q : quads) soup.polygons.push_back({q[3], q[2], q[1], q[0]});
+      clean = find_surface_problems(soup).empty();
+      if (clean) break;
+    }
   }
+  std::vector<float>().swap(phi);
   if (soup.polygons.empty())
     throw InputError(name + ": the repaired solid has no surface (nothing enclosed or thick)");
 

@@ -9,8 +9,8 @@
 // cavity stays a cavity). The solid is eroded back by the same distance (the distance to the
 // outside, from a Euclidean distance transform that knows each outside voxel's own distance to
 // the band), thin parts the erosion would remove (an open sheet) are kept as slabs about
-// `closing` voxels thick, the distance is smoothed once and meshed with volumeToMesh (at an
-// iso-value just off zero; a nearby one if the mesh has a defect). So the repaired surface
+// `closing` voxels thick, and the distance is meshed with volumeToMesh (at an iso-value just off
+// zero; a nearby one if the mesh has a defect, then the same after smoothing the distance once). So the repaired surface
 // follows a closed input within about a fifth of a voxel and spans a hole with a smooth cap.
 #pragma once
 
