@@ -7,6 +7,7 @@
 #include <openvdb/tools/VolumeToMesh.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -380,22 +381,28 @@ PolygonSoup repair_surface(const PolygonSoup& input, const RepairOptions& option
   };
   // Meshed slightly off zero: whole-voxel distances put exact zeros on grid points, where the
   // iso-surface would collapse triangles. Should the mesh still hold a defect (a zero-area
-  // triangle, two faces crossing), the next of a few nearby iso-values is tried, and then the
-  // same once the distance is smoothed.
+  // triangle, two faces crossing), the next of a few nearby iso-values is tried, then the same
+  // at half, a quarter of the adaptivity and at 0 (adaptive polygons merged across a thin part
+  // can cross), and then all of it once the distance is smoothed.
   std::vector<openvdb::Vec3s> points;
   std::vector<openvdb::Vec3I> triangles;
   std::vector<openvdb::Vec4I> quads;
   PolygonSoup soup;
   FloatGrid::Ptr sdf;
   bool clean = false;
+  std::vector<double> adaptivities = {options.adaptivity};
+  if (options.adaptivity > 0)
+    adaptivities.insert(adaptivities.end(), {options.adaptivity / 2, options.adaptivity / 4, 0.0});
   for (int pass = 0; pass < 2 && !clean; ++pass) {
     if (pass == 1) smooth();
     sdf = to_grid();
-    for (const double iso : {1e-3, 0.0137, 0.0291, -0.0113, 0.0457}) {
+    for (std::size_t attempt = 0; attempt < 5 * adaptivities.size() && !clean; ++attempt) {
+      const double iso = std::array<double, 5>{1e-3, 0.0137, 0.0291, -0.0113, 0.0457}[attempt % 5];
       points.clear();
       triangles.clear();
       quads.clear();
-      openvdb::tools::volumeToMesh(*sdf, points, triangles, quads, iso * h, options.adaptivity);
+      openvdb::tools::volumeToMesh(*sdf, points, triangles, quads, iso * h,
+                                   adaptivities[attempt / 5]);
       soup = PolygonSoup{};
       soup.points.reserve(points.size());
       for (const openvdb::Vec3s& p : points) soup.points.push_back({p[0], p[1], p[2]});
@@ -403,7 +410,6 @@ PolygonSoup repair_surface(const PolygonSoup& input, const RepairOptions& option
       for (const openvdb::Vec3I& t : triangles) soup.polygons.push_back({t[2], t[1], t[0]});
       for (const openvdb::Vec4I& q : quads) soup.polygons.push_back({q[3], q[2], q[1], q[0]});
       clean = find_surface_problems(soup).empty();
-      if (clean) break;
     }
   }
   std::vector<float>().swap(phi);

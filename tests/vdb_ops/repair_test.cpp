@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <random>
 #include <string>
 #include <vector>
@@ -274,6 +275,32 @@ TEST(Repair, SharedBrokenMeshesGiveValidShells) {
     double coverage = 0;
     EXPECT_EQ(shell_problems(r.surface.mesh, 48, &coverage), "") << name;
     EXPECT_GT(coverage, 0.5) << name;
+  }
+}
+
+TEST(Repair, AnAdaptiveMeshThatCrossesItselfIsMeshedLessAdaptively) {
+  // The beetle rebuilt at 96^3 and meshed at adaptivity 0.8 crosses itself (polygons merged
+  // across its slabs), smoothed or not; at a lower adaptivity the mesh is clean, and still
+  // coarser than at 0.
+  const auto dir = test::shared_meshes_dir();
+  if (dir.empty()) GTEST_SKIP() << "../shared/meshes is absent";
+  const PolygonSoup input = read_polygon_soup((dir / "beetle.obj").string());
+  ShellOptions options;
+  options.fields.resolution = 96;
+  options.repair = true;
+  RepairReport report;
+  const std::size_t dense =
+      load_repaired_surface(input, "beetle", options, report).mesh.triangles.size();
+  options.adaptivity = 0.8;
+  const LoadedSurface adaptive = load_repaired_surface(input, "beetle", options, report);
+  EXPECT_LT(adaptive.mesh.triangles.size(), dense * 3 / 4);
+  // Closed and 2-manifold, counted here: every edge in exactly two faces, once each way.
+  std::map<std::pair<std::uint32_t, std::uint32_t>, int> edges;
+  for (const Triangle& t : adaptive.mesh.triangles)
+    for (int k = 0; k < 3; ++k) ++edges[{t[k], t[(k + 1) % 3]}];
+  for (const auto& [e, n] : edges) {
+    ASSERT_EQ(n, 1) << e.first << "-" << e.second;
+    ASSERT_EQ(edges.count({e.second, e.first}), 1u) << e.first << "-" << e.second;
   }
 }
 
