@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <numeric>
 
 #include "core/assemble/quality.h"
@@ -88,6 +89,7 @@ class ShellSearch {
         folded_.push_back(static_cast<std::uint32_t>(v));
     }
     floor_fraction_ = options.floor_fraction;
+    floor_drop_ = options.floor_drop;
     update_caps();
   }
 
@@ -117,11 +119,30 @@ class ShellSearch {
                                       surface_.points[tri[2]]};
       const double edge =
           std::min({distance(p[0], p[1]), distance(p[1], p[2]), distance(p[2], p[0])});
+      const auto drops = cap_drops_.find(f);
+      const double depth = floor_fraction_ * edge *
+                           std::pow(floor_drop_, drops == cap_drops_.end() ? 0 : drops->second);
       caps_.cap_faces.push_back(f);
       caps_.cap_points.push_back((p[0] + p[1] + p[2]) / 3.0 -
-                                 normalized(face_normal_area(surface_, f)) *
-                                     (floor_fraction_ * edge));
+                                 normalized(face_normal_area(surface_, f)) * depth);
     }
+  }
+
+  /// The cap face of cap point `k` (ShellInput::cap_points), or UINT32_MAX.
+  std::uint32_t cap_face(std::size_t k) const {
+    return k < caps_.cap_faces.size() ? caps_.cap_faces[k] : UINT32_MAX;
+  }
+  bool is_cap(std::uint32_t f) const {
+    return std::binary_search(caps_.cap_faces.begin(), caps_.cap_faces.end(), f);
+  }
+  /// Moves cap face f's cap point floor_drop times closer to the face, unless it was moved
+  /// max_floor_drops times already (a cap is a floor element that never moves otherwise).
+  bool drop_cap(std::uint32_t f, int max_drops) {
+    int& drops = cap_drops_[f];
+    if (drops >= max_drops) return false;
+    ++drops;
+    update_caps();
+    return true;
   }
 
   /// Whether v is a sector of a folded vertex (InnerVertices::constraints, sectors.h).
@@ -415,14 +436,16 @@ class ShellSearch {
   std::vector<double> full_, floor_;
   std::vector<double> limit_;  ///< per vertex: InnerVertices::limit (infinity: none)
   std::vector<Vec3d> fallback_, correction_;
-  IndexLists groups_;                     ///< start weld group -> its vertices
-  std::vector<std::uint32_t> group_key_;  ///< per group: its smallest welded vertex (initial)
-  std::vector<double> group_depth_;       ///< per group: its welded members' largest depth
-  IndexLists faces_;                      ///< vertex -> its faces
-  std::vector<std::uint32_t> folded_;     ///< on the surface (t_v = 0), ascending
-  double floor_fraction_ = 0;             ///< ValidityOptions::floor_fraction
-  std::vector<int> drops_;                ///< per vertex: how often its floor was lowered
-  ShellInput caps_;                       ///< cap_faces and cap_points only
+  IndexLists groups_;                       ///< start weld group -> its vertices
+  std::vector<std::uint32_t> group_key_;    ///< per group: its smallest welded vertex (initial)
+  std::vector<double> group_depth_;         ///< per group: its welded members' largest depth
+  IndexLists faces_;                        ///< vertex -> its faces
+  std::vector<std::uint32_t> folded_;       ///< on the surface (t_v = 0), ascending
+  double floor_fraction_ = 0;               ///< ValidityOptions::floor_fraction
+  double floor_drop_ = 1;                   ///< ValidityOptions::floor_drop
+  std::map<std::uint32_t, int> cap_drops_;  ///< per cap face: how often its depth was dropped
+  std::vector<int> drops_;                  ///< per vertex: how often its floor was lowered
+  ShellInput caps_;                         ///< cap_faces and cap_points only
   // position(v, t) of the last build, by vertex (t = -1: none yet).
   mutable std::vector<double> cached_t_;
   mutable std::vector<Vec3d> cached_position_;
@@ -651,9 +674,25 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
           for (const auto* list :
                {&c.first_inverted_tets, &c.first_zero_volume_tets, &c.first_leaking_tets})
             offending.insert(offending.end(), list->begin(), list->end());
-          for (const std::uint32_t t : offending)
-            for (const std::uint32_t v : surface.triangles[floor.mesh.source_triangle[t]])
+          // A cap point, the one floor element that never moves, moves closer to its face.
+          std::vector<std::uint32_t> caps;
+          const std::size_t first_cap = n + in.inner_points.size();
+          for (const std::uint32_t p : c.first_outside_vertices)
+            if (p >= first_cap) caps.push_back(search.cap_face(p - first_cap));
+          for (const std::uint32_t t : offending) {
+            const std::uint32_t f = floor.mesh.source_triangle[t];
+            if (search.is_cap(f)) caps.push_back(f);
+            for (const std::uint32_t v : surface.triangles[f])
               if (search.is_sector(v) && search.keep_on_surface(s, v)) {
+                lowered[v] = 1;
+                progress = true;
+              }
+          }
+          std::sort(caps.begin(), caps.end());
+          caps.erase(std::unique(caps.begin(), caps.end()), caps.end());
+          for (const std::uint32_t f : caps)
+            if (f != UINT32_MAX && search.is_cap(f) && search.drop_cap(f, options.max_floor_drops))
+              for (const std::uint32_t v : surface.triangles[f]) {
                 lowered[v] = 1;
                 progress = true;
               }

@@ -29,7 +29,8 @@
 // divided by floor_drop (at most max_floor_drops times each) and the search goes on; after that
 // the floor configuration is checked: sectors of folded vertices among its offenders (two
 // sectors whose directions cross overlap at any depth) are kept on the surface from then on,
-// each at most once, and the search goes on; otherwise the run fails, naming what it broke.
+// each at most once, cap points among them move closer to their faces as floors do, and the
+// search goes on; otherwise the run fails, naming what it broke.
 // Vertices that were never involved keep their full depth: the shell stays as thick as the
 // traces allow wherever it is already valid; the gentle shrink, applied locally until each
 // offence is gone, takes little more than needed from those that were, and once the shell is
