@@ -665,8 +665,9 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
         const ShellInput in = search.build(search.floor_state(), members);
         const AssembleResult floor = assemble_shell(surface, in, no_quality);
         const ShellCheckResult c = check_shell(surface, floor.mesh, check_options);
-        // Sectors of a folded vertex among its offenders go on the surface, and the search goes
-        // on (each at most once); anything else offending at the floor is a failure.
+        // Sectors of a folded vertex among its offenders go on the surface (each once), their cap
+        // points move closer to their faces (as floors drop), and the search goes on; anything
+        // else offending at the floor is a failure.
         if (!c.valid()) {
           std::vector<std::uint32_t> offending;
           for (const auto& pair : c.first_overlapping_pairs)
@@ -674,7 +675,6 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
           for (const auto* list :
                {&c.first_inverted_tets, &c.first_zero_volume_tets, &c.first_leaking_tets})
             offending.insert(offending.end(), list->begin(), list->end());
-          // A cap point, the one floor element that never moves, moves closer to its face.
           std::vector<std::uint32_t> caps;
           const std::size_t first_cap = n + in.inner_points.size();
           for (const std::uint32_t p : c.first_outside_vertices)
