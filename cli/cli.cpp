@@ -115,7 +115,6 @@ bool surface_extension(const std::string& path) {
 }
 
 /// Rejects options that contradict each other, saying what to do instead.
-
 void check_contradictions(const CliOptions& o) {
   namespace fs = std::filesystem;
   if (o.quiet && o.progress)

@@ -7,7 +7,6 @@
 #include <openvdb/tools/VolumeToMesh.h>
 
 #include <algorithm>
-#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -396,20 +395,17 @@ PolygonSoup repair_surface(const PolygonSoup& input, const RepairOptions& option
   for (int pass = 0; pass < 2 && !clean; ++pass) {
     if (pass == 1) smooth();
     sdf = to_grid();
-    for (std::size_t attempt = 0; attempt < 5 * adaptivities.size() && !clean; ++attempt) {
-      const double iso = std::array<double, 5>{1e-3, 0.0137, 0.0291, -0.0113, 0.0457}[attempt % 5];
-      points.clear();
-      triangles.clear();
-      quads.clear();
-      openvdb::tools::volumeToMesh(*sdf, points, triangles, quads, iso * h,
-                                   adaptivities[attempt / 5]);
-      soup = PolygonSoup{};
-      soup.points.reserve(points.size());
-      for (const openvdb::Vec3s& p : points) soup.points.push_back({p[0], p[1], p[2]});
-      // volumeToMesh's polygons face into the negative (inside) region: reverse them.
-      for (const openvdb::Vec3I& t : triangles) soup.polygons.push_back({t[2], t[1], t[0]});
-      for (const openvdb::Vec4I& q : quads) soup.polygons.push_back({q[3], q[2], q[1], q[0]});
-      clean = find_surface_problems(soup).empty();
+    for (const double adaptivity : adaptivities) {
+      for (const double iso : {1e-3, 0.0137, 0.0291, -0.0113, 0.0457}) {
+        points.clear();
+        triangles.clear();
+        quads.clear();
+        openvdb::tools::volumeToMesh(*sdf, points, triangles, quads, iso * h, adaptivity);
+        soup = fields_detail::reversed_polygons(points, triangles, quads);  // facing outward
+        clean = find_surface_problems(soup).empty();
+        if (clean) break;
+      }
+      if (clean) break;
     }
   }
   std::vector<float>().swap(phi);

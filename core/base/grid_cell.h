@@ -1,5 +1,5 @@
 // grid_cell.h — a cell of a uniform grid of cubes, and its hash: the key of hash grids over
-// points (inner.cpp's welding).
+// points (inner.cpp's welding) and the cells of the merge grid (merges.cpp).
 #pragma once
 
 #include <cmath>

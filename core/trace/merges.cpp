@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include "core/base/grid_cell.h"
 #include "core/base/parallel.h"
 
 namespace vdb_shell {
@@ -214,9 +215,7 @@ class CellTable {
 /// bin.
 class SampleGrid {
  public:
-  struct Cell {
-    std::int64_t i, j, k;
-  };
+  using Cell = GridCell;  // relative to the grid's corner (cell_of())
 
   SampleGrid(const TraceResult& r, const std::vector<std::uint32_t>& indexed,
              const std::vector<std::uint32_t>& eligible, double point_size) {
@@ -343,8 +342,7 @@ class SampleGrid {
     const Cell c = cell_of(p);
     auto half = [](std::int64_t i) { return i >= 0 ? i / 2 : -1; };
     const Cell block{half(c.i), half(c.j), half(c.k)};
-    if (block.i == last.block.i && block.j == last.block.j && block.k == last.block.k)
-      return last.bins;
+    if (block == last.block) return last.bins;
     last.block = block;
     const std::uint32_t b = in_grid(block) ? blocks_.find(key_of(block)) : CellTable::kNone;
     // A block without samples of its own has no precomputed answer.

@@ -61,11 +61,13 @@ struct Repaired {
   double h = 0;
 };
 
-Repaired repair(const PolygonSoup& soup, int resolution = 48, double closing = 2.0) {
+Repaired repair(const PolygonSoup& soup, int resolution = 48, double closing = 2.0,
+                double adaptivity = 0.0) {
   ShellOptions options;
   options.fields.resolution = resolution;
   options.repair = true;
   options.repair_closing = closing;
+  options.adaptivity = adaptivity;
   Repaired r;
   r.surface = load_repaired_surface(soup, "test", options, r.report);
   r.h = r.report.voxel_size;
@@ -285,18 +287,12 @@ TEST(Repair, AnAdaptiveMeshThatCrossesItselfIsMeshedLessAdaptively) {
   const auto dir = test::shared_meshes_dir();
   if (dir.empty()) GTEST_SKIP() << "../shared/meshes is absent";
   const PolygonSoup input = read_polygon_soup((dir / "beetle.obj").string());
-  ShellOptions options;
-  options.fields.resolution = 96;
-  options.repair = true;
-  RepairReport report;
-  const std::size_t dense =
-      load_repaired_surface(input, "beetle", options, report).mesh.triangles.size();
-  options.adaptivity = 0.8;
-  const LoadedSurface adaptive = load_repaired_surface(input, "beetle", options, report);
-  EXPECT_LT(adaptive.mesh.triangles.size(), dense * 3 / 4);
+  const std::size_t dense = repair(input, 96).surface.mesh.triangles.size();
+  const SurfaceMesh adaptive = repair(input, 96, 2.0, 0.8).surface.mesh;
+  EXPECT_LT(adaptive.triangles.size(), dense * 3 / 4);
   // Closed and 2-manifold, counted here: every edge in exactly two faces, once each way.
   std::map<std::pair<std::uint32_t, std::uint32_t>, int> edges;
-  for (const Triangle& t : adaptive.mesh.triangles)
+  for (const Triangle& t : adaptive.triangles)
     for (int k = 0; k < 3; ++k) ++edges[{t[k], t[(k + 1) % 3]}];
   for (const auto& [e, n] : edges) {
     ASSERT_EQ(n, 1) << e.first << "-" << e.second;
@@ -327,17 +323,13 @@ TEST(Repair, CapPointsOfTheRebuiltBeetleMoveCloserToTheirFaces) {
   // a thin part; it moves closer to its face as a floor does (search.h). Checked independently.
   const auto dir = test::shared_meshes_dir();
   if (dir.empty()) GTEST_SKIP() << "../shared/meshes is absent";
-  const PolygonSoup input = read_polygon_soup((dir / "beetle.obj").string());
+  const Repaired r = repair(read_polygon_soup((dir / "beetle.obj").string()), 96, 2.0, 0.2);
   ShellOptions options;
   options.fields.resolution = 96;
-  options.repair = true;
-  options.adaptivity = 0.2;
-  RepairReport report;
-  const LoadedSurface surface = load_repaired_surface(input, "beetle", options, report);
-  const ShellResult shell = build_shell(surface, options);
+  const ShellResult shell = build_shell(r.surface, options);
   EXPECT_GE(shell.validity.cap_faces, 1u);
-  EXPECT_EQ(test::independent_shell_problems(surface.mesh, shell.mesh, 2 * shell.validity.sectors),
-            "");
+  EXPECT_EQ(
+      test::independent_shell_problems(r.surface.mesh, shell.mesh, 2 * shell.validity.sectors), "");
 }
 
 }  // namespace

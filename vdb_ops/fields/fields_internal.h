@@ -160,6 +160,12 @@ using GridSelector = std::function<std::string(const openvdb::GridPtrVec& metas)
 ///        ResourceError if the child cannot be started.
 openvdb::GridPtrVecPtr read_vdb_isolated(const std::string& path, const GridSelector& select);
 
+/// volumeToMesh's output (index lists into `points`) as polygons facing the other way: out of
+/// the region below the iso-value for a level set, out of the one above it for any other class.
+PolygonSoup reversed_polygons(const std::vector<openvdb::Vec3s>& points,
+                              const std::vector<openvdb::Vec3I>& triangles,
+                              const std::vector<openvdb::Vec4I>& quads);
+
 /// Which grids read_float_grid() takes.
 enum class GridKinds {
   kLevelSet,  ///< float level sets only

@@ -342,6 +342,18 @@ void require_readable(const std::string& path) {
   }
 }
 
+PolygonSoup reversed_polygons(const std::vector<openvdb::Vec3s>& points,
+                              const std::vector<openvdb::Vec3I>& triangles,
+                              const std::vector<openvdb::Vec4I>& quads) {
+  PolygonSoup soup;
+  soup.points.reserve(points.size());
+  for (const openvdb::Vec3s& p : points) soup.points.push_back({p[0], p[1], p[2]});
+  soup.polygons.reserve(triangles.size() + quads.size());
+  for (const openvdb::Vec3I& t : triangles) soup.polygons.push_back({t[2], t[1], t[0]});
+  for (const openvdb::Vec4I& q : quads) soup.polygons.push_back({q[3], q[2], q[1], q[0]});
+  return soup;
+}
+
 FloatGrid::Ptr read_float_grid(const std::string& vdb_path, const std::string& grid_name,
                                GridKinds kinds, std::string& where, const std::string& hint) {
   const auto choose = [&](const openvdb::GridPtrVec& metas) {
@@ -434,13 +446,8 @@ VolumeSurface volume_to_soup(const std::string& vdb_path, const std::string& gri
   std::vector<openvdb::Vec3I> triangles;
   std::vector<openvdb::Vec4I> quads;
   openvdb::tools::volumeToMesh(*grid, points, triangles, quads, out.isovalue, adaptivity);
+  out.soup = reversed_polygons(points, triangles, quads);
   PolygonSoup& soup = out.soup;
-  soup.points.reserve(points.size());
-  for (const openvdb::Vec3s& p : points) soup.points.push_back({p[0], p[1], p[2]});
-  // volumeToMesh's polygons face into the region below the iso-value for a level set, above it
-  // for any other class: reversed, they face out of it.
-  for (const openvdb::Vec3I& t : triangles) soup.polygons.push_back({t[2], t[1], t[0]});
-  for (const openvdb::Vec4I& q : quads) soup.polygons.push_back({q[3], q[2], q[1], q[0]});
   if (soup.polygons.empty()) {
     throw InputError(out.where + " has no crossing of " + format_double(out.isovalue) +
                      ": it holds no surface to mesh");
