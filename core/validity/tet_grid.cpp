@@ -238,17 +238,54 @@ void invert_cells(const std::vector<std::uint64_t>& start, const std::vector<std
     for (std::uint64_t k = start[i]; k < start[i + 1]; ++k) items[fill[cells[k]]++] = id[i];
 }
 
+// Slots of tets by a Z-order curve through the centres of their boxes in `box`: per key its slot
+// (`slot`) and per slot its key (`key`). Ties (and empty geometry) in key order.
+void z_order(const std::vector<TetGeometry>& geo, const BBox& box, std::vector<std::uint32_t>& slot,
+             std::vector<std::uint32_t>& key) {
+  const auto n = static_cast<std::uint32_t>(geo.size());
+  // Spreads the 21 low bits of x to every third bit.
+  const auto spread = [](std::uint64_t x) {
+    x &= 0x1fffff;
+    x = (x | x << 32) & 0x1f00000000ffffULL;
+    x = (x | x << 16) & 0x1f0000ff0000ffULL;
+    x = (x | x << 8) & 0x100f00f00f00f00fULL;
+    x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
+    x = (x | x << 2) & 0x1249249249249249ULL;
+    return x;
+  };
+  const double scale = box.max_side() > 0.0 ? 2097151.0 / box.max_side() : 0.0;
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> order(n);  // (code, key)
+  for_each_index(n, [&](std::size_t k) {
+    order[k] = {0, static_cast<std::uint32_t>(k)};
+    if (geo[k].box.empty()) return;
+    const Vec3d c = (geo[k].box.lo + geo[k].box.hi) * 0.5 - box.lo;
+    std::uint64_t q[3];
+    for (int a = 0; a < 3; ++a)
+      q[a] = static_cast<std::uint64_t>(std::clamp(c[a] * scale, 0.0, 2097151.0));
+    order[k].first = spread(q[0]) | spread(q[1]) << 1 | spread(q[2]) << 2;
+  });
+  parallel_sort(order.begin(), order.end());
+  key.resize(n);
+  slot.resize(n);
+  for (std::uint32_t s = 0; s < n; ++s) {
+    key[s] = order[s].second;
+    slot[key[s]] = s;
+  }
+}
+
 }  // namespace
 
 BroadPhase::BroadPhase(const SurfaceMesh& surface, const BBox& box, double cell_size,
                        std::vector<TetGeometry> geometry, bool enter_triangles)
     : surface_(surface),
       grid_(box, cell_size),
-      geo_(std::move(geometry)),
-      box_(geo_.size()),
-      state_(geo_.size(), kAbsent),
-      key_cells_(geo_.size()),
-      cell_keys_(grid_.num_cells()) {
+      box_(geometry.size()),
+      state_(geometry.size(), kAbsent),
+      slot_cells_(geometry.size()),
+      cell_slots_(grid_.num_cells()) {
+  z_order(geometry, box, slot_, key_);
+  geo_.resize(geometry.size());
+  for (std::size_t k = 0; k < geometry.size(); ++k) geo_[slot_[k]] = std::move(geometry[k]);
   if (enter_triangles) this->enter_triangles();
 }
 
@@ -272,43 +309,51 @@ void BroadPhase::enter_triangles() {
   invert_cells(start, cells, id, grid_.num_cells(), triangle_start_, triangle_items_);
 }
 
-void BroadPhase::set_geometry(std::uint32_t key, const TetGeometry& g) { geo_[key] = g; }
+void BroadPhase::set_geometry(std::uint32_t key, const TetGeometry& g) { geo_[slot_[key]] = g; }
+
+std::vector<std::uint32_t> BroadPhase::slots_of(const std::vector<std::uint32_t>& keys) const {
+  std::vector<std::uint32_t> slots(keys.size());
+  for (std::size_t i = 0; i < keys.size(); ++i) slots[i] = slot_[keys[i]];
+  std::sort(slots.begin(), slots.end());
+  return slots;
+}
 
 void BroadPhase::insert(const std::vector<std::uint32_t>& keys) {
-  const std::size_t n = keys.size();
+  const std::vector<std::uint32_t> slots = slots_of(keys);
+  const std::size_t n = slots.size();
   std::vector<std::uint8_t> stray(n, 0);
   std::vector<std::uint64_t> start;
-  for_each_index(n, [&](std::size_t i) { stray[i] = grid_.contains(geo_[keys[i]].box) ? 0 : 1; });
+  for_each_index(n, [&](std::size_t i) { stray[i] = grid_.contains(geo_[slots[i]].box) ? 0 : 1; });
   std::vector<std::uint32_t> cells = collect_cells(
-      n, [&](std::size_t i) { return stray[i] ? 0 : grid_.box_cells(geo_[keys[i]].box); },
+      n, [&](std::size_t i) { return stray[i] ? 0 : grid_.box_cells(geo_[slots[i]].box); },
       [&](std::size_t i, std::uint32_t* out) -> std::size_t {
-        return stray[i] ? 0 : grid_.cells_of(geo_[keys[i]], out);
+        return stray[i] ? 0 : grid_.cells_of(geo_[slots[i]], out);
       },
       start);
   for (std::size_t i = 0; i < n; ++i) {
-    const std::uint32_t key = keys[i];
-    box_[key] = geo_[key].box;
-    state_[key] = stray[i] ? kStray : kInGrid;
-    if (stray[i]) stray_keys_.push_back(key);
+    const std::uint32_t slot = slots[i];
+    box_[slot] = geo_[slot].box;
+    state_[slot] = stray[i] ? kStray : kInGrid;
+    if (stray[i]) stray_slots_.push_back(slot);
   }
   if (size_ == 0) {  // every list is empty: all of them in one pass
-    std::vector<std::uint64_t> key_start(geo_.size() + 1, 0);
-    for (std::size_t i = 0; i < n; ++i) key_start[keys[i] + 1] = start[i + 1] - start[i];
-    for (std::size_t k = 0; k < geo_.size(); ++k) key_start[k + 1] += key_start[k];
+    std::vector<std::uint64_t> slot_start(geo_.size() + 1, 0);
+    for (std::size_t i = 0; i < n; ++i) slot_start[slots[i] + 1] = start[i + 1] - start[i];
+    for (std::size_t k = 0; k < geo_.size(); ++k) slot_start[k + 1] += slot_start[k];
     std::vector<std::uint64_t> cell_start;
     std::vector<std::uint32_t> items;
-    invert_cells(start, cells, keys, grid_.num_cells(), cell_start, items);
-    cell_keys_.assign(std::move(cell_start), std::move(items));
-    key_cells_.assign(std::move(key_start), std::move(cells));  // keys ascending: in key order
+    invert_cells(start, cells, slots, grid_.num_cells(), cell_start, items);
+    cell_slots_.assign(std::move(cell_start), std::move(items));
+    slot_cells_.assign(std::move(slot_start), std::move(cells));  // slots ascending: in order
   } else {
-    // Every (cell, key) entry, by cell and then key: each cell's list is merged once.
+    // Every (cell, slot) entry, by cell and then slot: each cell's list is merged once.
     std::vector<std::uint64_t> entries;
     entries.reserve(cells.size());
     for (std::size_t i = 0; i < n; ++i) {
-      const std::uint32_t key = keys[i];
-      key_cells_.set(key, cells.data() + start[i], start[i + 1] - start[i]);
+      const std::uint32_t slot = slots[i];
+      slot_cells_.set(slot, cells.data() + start[i], start[i + 1] - start[i]);
       for (std::uint64_t k = start[i]; k < start[i + 1]; ++k)
-        entries.push_back(std::uint64_t{cells[k]} << 32 | key);
+        entries.push_back(std::uint64_t{cells[k]} << 32 | slot);
     }
     std::sort(entries.begin(), entries.end());
     std::vector<std::uint32_t> run;
@@ -317,7 +362,7 @@ void BroadPhase::insert(const std::vector<std::uint32_t>& keys) {
       run.clear();
       for (; i < entries.size() && static_cast<std::uint32_t>(entries[i] >> 32) == cell; ++i)
         run.push_back(static_cast<std::uint32_t>(entries[i]));
-      cell_keys_.merge_sorted(cell, run.data(), run.size());
+      cell_slots_.merge_sorted(cell, run.data(), run.size());
     }
   }
   size_ += n;
@@ -327,25 +372,25 @@ void BroadPhase::remove(const std::vector<std::uint32_t>& keys) {
   std::vector<std::uint8_t> drop(geo_.size(), 0);
   std::vector<std::uint32_t> cells;
   bool stray = false;
-  for (const std::uint32_t key : keys) {
-    if (state_[key] == kAbsent) continue;
-    drop[key] = 1;
-    if (state_[key] == kStray) {
+  for (const std::uint32_t slot : slots_of(keys)) {
+    if (state_[slot] == kAbsent) continue;
+    drop[slot] = 1;
+    if (state_[slot] == kStray) {
       stray = true;
     } else {
-      cells.insert(cells.end(), key_cells_.begin(key), key_cells_.end(key));
-      key_cells_.set(key, nullptr, 0);
+      cells.insert(cells.end(), slot_cells_.begin(slot), slot_cells_.end(slot));
+      slot_cells_.set(slot, nullptr, 0);
     }
-    state_[key] = kAbsent;
+    state_[slot] = kAbsent;
     --size_;
   }
   if (stray)
-    stray_keys_.erase(std::remove_if(stray_keys_.begin(), stray_keys_.end(),
-                                     [&](std::uint32_t k) { return drop[k] != 0; }),
-                      stray_keys_.end());
+    stray_slots_.erase(std::remove_if(stray_slots_.begin(), stray_slots_.end(),
+                                      [&](std::uint32_t k) { return drop[k] != 0; }),
+                       stray_slots_.end());
   std::sort(cells.begin(), cells.end());
   cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
-  for (const std::uint32_t c : cells) cell_keys_.erase_flagged(c, drop);
+  for (const std::uint32_t c : cells) cell_slots_.erase_flagged(c, drop);
 }
 
 }  // namespace vdb_shell

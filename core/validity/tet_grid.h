@@ -105,13 +105,18 @@ class PooledLists {
 
 /// Tets and surface triangles in the cells of one TetGrid. A tet is named by a key in
 /// [0, key_count()); a key is absent, in the grid, or stray: its box leaves the grid's box, and it
-/// is then a candidate of every tet and every triangle a candidate of it. Cell lists are kept in
-/// increasing key order.
+/// is then a candidate of every tet and every triangle a candidate of it.
+///
+/// Inside, the phase numbers the keys its own way: slots, in the order of a Z-order curve through
+/// the centres of the constructor's geometry, so that tets near each other have near slots and a
+/// query's reads of cell lists, marks and geometry stay in few cache lines whatever order the
+/// caller's keys are in (a mesh with shuffled faces is checked as fast as a coherent one). The
+/// queries below take and visit slots; cell lists are kept in increasing slot order.
 class BroadPhase {
  public:
   /// A grid over `box` with cells of side `cell_size` (world units) for the tets of keys
   /// [0, geometry.size()), none entered yet; tet k has the geometry geometry[k] until
-  /// set_geometry() changes it. With `enter_triangles`, every triangle of `surface` whose box
+  /// set_geometry() changes it, and the slots follow these geometries. With `enter_triangles`, every triangle of `surface` whose box
   /// meets `box` is entered in the cells of TetGrid::cells_of_triangle(). `surface` must outlive
   /// the object.
   BroadPhase(const SurfaceMesh& surface, const BBox& box, double cell_size,
@@ -119,7 +124,7 @@ class BroadPhase {
 
   /// Gives tet `key` the geometry `g`. \pre !contains(key)
   void set_geometry(std::uint32_t key, const TetGeometry& g);
-  /// Enters the tets `keys` (ascending, absent) at their geometry. Their cells are found in
+  /// Enters the tets `keys` (distinct, absent) at their geometry. Their cells are found in
   /// parallel; into an empty phase the cell lists are built in one pass.
   void insert(const std::vector<std::uint32_t>& keys);
   /// Removes the tets `keys` (distinct); does nothing for those absent. Each cell's list is
@@ -130,24 +135,29 @@ class BroadPhase {
   std::size_t key_count() const { return geo_.size(); }
   /// How many keys are in the grid or stray.
   std::size_t size() const { return size_; }
-  bool contains(std::uint32_t key) const { return state_[key] != kAbsent; }
-  const TetGeometry& geometry(std::uint32_t key) const { return geo_[key]; }
-  /// Its box, kept apart from the geometry so that the candidates' boxes are read compactly.
-  const BBox& box(std::uint32_t key) const { return box_[key]; }
+  bool contains(std::uint32_t key) const { return state_[slot_[key]] != kAbsent; }
+  const TetGeometry& geometry(std::uint32_t key) const { return geo_[slot_[key]]; }
 
-  /// Calls visit(other) once for every key `other` that shares a cell with tet `key` (`key`
-  /// itself included), every stray key, and, when `key` is stray, every key. With `only_greater`
-  /// the keys below `key` in its cells are skipped. `mark` has one entry per key, none equal to
-  /// `stamp` before the call; it marks the keys visited.
+  /// The slot of `key`, and the key of `slot` (both in [0, key_count())).
+  std::uint32_t slot(std::uint32_t key) const { return slot_[key]; }
+  std::uint32_t key(std::uint32_t slot) const { return key_[slot]; }
+  const TetGeometry& slot_geometry(std::uint32_t slot) const { return geo_[slot]; }
+  /// Its box, kept apart from the geometry so that the candidates' boxes are read compactly.
+  const BBox& slot_box(std::uint32_t slot) const { return box_[slot]; }
+
+  /// Calls visit(other) once for every slot `other` whose tet shares a cell with that of `slot`
+  /// (`slot` itself included), every stray tet's slot, and, when `slot` is stray, every slot in
+  /// the phase. With `only_greater` the slots below `slot` in its cells are skipped. `mark` has
+  /// one entry per slot, none equal to `stamp` before the call; it marks the slots visited.
   template <class Visit>
-  void for_each_tet_near(std::uint32_t key, bool only_greater, std::vector<std::uint32_t>& mark,
+  void for_each_tet_near(std::uint32_t slot, bool only_greater, std::vector<std::uint32_t>& mark,
                          std::uint32_t stamp, const Visit& visit) const;
 
-  /// Calls visit(f) once for every surface triangle f that shares a cell with tet `key`, or for
-  /// every triangle when `key` is stray; for none unless the triangles were entered. `mark`: one
-  /// entry per triangle, as above.
+  /// Calls visit(f) once for every surface triangle f that shares a cell with the tet of `slot`,
+  /// or for every triangle when it is stray; for none unless the triangles were entered. `mark`:
+  /// one entry per triangle, as above.
   template <class Visit>
-  void for_each_triangle_near(std::uint32_t key, std::vector<std::uint32_t>& mark,
+  void for_each_triangle_near(std::uint32_t slot, std::vector<std::uint32_t>& mark,
                               std::uint32_t stamp, const Visit& visit) const;
 
  private:
@@ -155,20 +165,24 @@ class BroadPhase {
 
   void enter_triangles();
 
+  // The slots of `keys`, ascending.
+  std::vector<std::uint32_t> slots_of(const std::vector<std::uint32_t>& keys) const;
+
   const SurfaceMesh& surface_;
   TetGrid grid_;
-  std::vector<TetGeometry> geo_;  // per key
-  std::vector<BBox> box_;         // per key
-  std::vector<State> state_;      // per key
+  std::vector<std::uint32_t> slot_, key_;  // per key its slot, per slot its key
+  std::vector<TetGeometry> geo_;           // per slot
+  std::vector<BBox> box_;                  // per slot
+  std::vector<State> state_;               // per slot
   std::size_t size_ = 0;
-  PooledLists key_cells_;                  // per key: its cells, ascending (none when stray)
-  PooledLists cell_keys_;                  // per cell: its keys, ascending
-  std::vector<std::uint32_t> stray_keys_;  // in no particular order
+  PooledLists slot_cells_;                  // per slot: its cells, ascending (none when stray)
+  PooledLists cell_slots_;                  // per cell: its slots, ascending
+  std::vector<std::uint32_t> stray_slots_;  // in no particular order
   std::vector<std::uint32_t> triangle_start_, triangle_items_;  // per cell: its triangles
 };
 
 template <class Visit>
-void BroadPhase::for_each_tet_near(std::uint32_t key, bool only_greater,
+void BroadPhase::for_each_tet_near(std::uint32_t slot, bool only_greater,
                                    std::vector<std::uint32_t>& mark, std::uint32_t stamp,
                                    const Visit& visit) const {
   std::uint32_t* const marks = mark.data();
@@ -177,30 +191,30 @@ void BroadPhase::for_each_tet_near(std::uint32_t key, bool only_greater,
     marks[other] = stamp;
     visit(other);
   };
-  if (state_[key] == kStray) {
+  if (state_[slot] == kStray) {
     for (std::uint32_t other = 0; other < state_.size(); ++other)
       if (state_[other] != kAbsent) once(other);
     return;
   }
-  for (const std::uint32_t* c = key_cells_.begin(key); c != key_cells_.end(key); ++c) {
-    const std::uint32_t* first = cell_keys_.begin(*c);
-    const std::uint32_t* last = cell_keys_.end(*c);
-    for (const std::uint32_t* it = only_greater ? std::upper_bound(first, last, key) : first;
+  for (const std::uint32_t* c = slot_cells_.begin(slot); c != slot_cells_.end(slot); ++c) {
+    const std::uint32_t* first = cell_slots_.begin(*c);
+    const std::uint32_t* last = cell_slots_.end(*c);
+    for (const std::uint32_t* it = only_greater ? std::upper_bound(first, last, slot) : first;
          it != last; ++it)
       once(*it);
   }
-  for (const std::uint32_t other : stray_keys_) once(other);
+  for (const std::uint32_t other : stray_slots_) once(other);
 }
 
 template <class Visit>
-void BroadPhase::for_each_triangle_near(std::uint32_t key, std::vector<std::uint32_t>& mark,
+void BroadPhase::for_each_triangle_near(std::uint32_t slot, std::vector<std::uint32_t>& mark,
                                         std::uint32_t stamp, const Visit& visit) const {
   if (triangle_start_.empty()) return;
-  if (state_[key] == kStray) {
+  if (state_[slot] == kStray) {
     for (std::uint32_t f = 0; f < surface_.triangles.size(); ++f) visit(f);
     return;
   }
-  for (const std::uint32_t* c = key_cells_.begin(key); c != key_cells_.end(key); ++c)
+  for (const std::uint32_t* c = slot_cells_.begin(slot); c != slot_cells_.end(slot); ++c)
     for (std::uint32_t i = triangle_start_[*c]; i < triangle_start_[*c + 1]; ++i) {
       const std::uint32_t f = triangle_items_[i];
       if (mark[f] == stamp) continue;

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <random>
 #include <string>
 #include <utility>
@@ -369,6 +370,52 @@ TEST(ShellChecks, SameResultForAnyThreadCount) {
   EXPECT_EQ(serial.first_outside_vertices, parallel.first_outside_vertices);
   EXPECT_EQ(serial.overlap_candidate_pairs, parallel.overlap_candidate_pairs);
   EXPECT_EQ(describe_problems(serial), describe_problems(parallel));
+}
+
+TEST(ShellChecks, TetOrderChangesNothingAndEveryOverlapIsFound) {
+  // The broken sphere shell and the same tets shuffled: the same overlapping pairs (mapped back)
+  // and leaks — and the pairs are exactly those of a test of every pair of tets.
+  const SurfaceMesh s = make_shape("sphere", 2);
+  const TetMesh m = broken_sphere_shell(s);
+  const std::size_t n = m.tets.size();
+  std::vector<std::uint32_t> order(n);  // shuffled position -> tet of m
+  std::iota(order.begin(), order.end(), 0u);
+  std::shuffle(order.begin(), order.end(), std::mt19937(11));
+  TetMesh shuffled = m;
+  for (std::size_t i = 0; i < n; ++i) shuffled.tets[i] = m.tets[order[i]];
+  ShellCheckOptions options;
+  options.max_listed = std::numeric_limits<std::size_t>::max();
+  const ShellCheckResult a = check_shell(s, m, options);
+  const ShellCheckResult b = check_shell(s, shuffled, options);
+  std::vector<std::array<std::uint32_t, 2>> mapped;
+  for (const auto& pair : b.first_overlapping_pairs)
+    mapped.push_back({std::min(order[pair[0]], order[pair[1]]),
+                      std::max(order[pair[0]], order[pair[1]])});
+  std::sort(mapped.begin(), mapped.end());
+  EXPECT_EQ(mapped, a.first_overlapping_pairs);
+  std::vector<std::uint32_t> leaking;
+  for (const std::uint32_t t : b.first_leaking_tets) leaking.push_back(order[t]);
+  std::sort(leaking.begin(), leaking.end());
+  EXPECT_EQ(leaking, a.first_leaking_tets);
+
+  const auto corners = [&](std::uint32_t t) {
+    const Tet& v = m.tets[t];
+    return std::array<Vec3d, 4>{m.points[v[0]], m.points[v[1]], m.points[v[2]], m.points[v[3]]};
+  };
+  std::vector<BBox> box(n);
+  for (std::uint32_t t = 0; t < n; ++t)
+    for (const Vec3d& p : corners(t)) box[t].expand(p);
+  const auto apart = [&](std::uint32_t i, std::uint32_t j) {
+    for (int a = 0; a < 3; ++a)
+      if (box[i].hi[a] < box[j].lo[a] || box[j].hi[a] < box[i].lo[a]) return true;
+    return false;
+  };
+  std::vector<std::array<std::uint32_t, 2>> every;
+  for (std::uint32_t i = 0; i < n; ++i)
+    for (std::uint32_t j = i + 1; j < n; ++j)
+      if (!apart(i, j) && tets_overlap(corners(i), corners(j), options)) every.push_back({i, j});
+  EXPECT_GT(every.size(), 10u);
+  EXPECT_EQ(a.first_overlapping_pairs, every);
 }
 
 TEST(ShellChecks, FortyThousandTetShellsReportNothing) {
