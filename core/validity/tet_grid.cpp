@@ -24,15 +24,9 @@ bool TetGrid::contains(const BBox& b) const {
 }
 
 std::size_t TetGrid::cells_of(const TetGeometry& g, std::uint32_t* out) const {
-  return cells_in(g.box, out, [&](const Vec3d& centre, double reach_scale) {
-    for (int f = 0; f < 4; ++f) {
-      const Vec3d& n = g.n[f];
-      const double c = dot(n, centre);
-      const double reach = reach_scale * (std::abs(n.x) + std::abs(n.y) + std::abs(n.z));
-      if (c - reach > g.hi[f] || c + reach < g.lo[f]) return false;
-    }
-    return true;
-  });
+  std::array<Slab, 4> slabs;
+  for (int f = 0; f < 4; ++f) slabs[f] = {g.n[f], g.lo[f], g.hi[f]};
+  return cells_in(g.box, slabs, out);
 }
 
 std::size_t TetGrid::cells_of_triangle(const std::array<Vec3d, 3>& t, std::uint32_t* out) const {
@@ -40,10 +34,7 @@ std::size_t TetGrid::cells_of_triangle(const std::array<Vec3d, 3>& t, std::uint3
   for (const Vec3d& p : t) box.expand(p);
   const Vec3d n = normalized(cross(t[1] - t[0], t[2] - t[0]));
   const double plane = dot(n, t[0]);
-  return cells_in(box, out, [&](const Vec3d& centre, double reach_scale) {
-    const double reach = reach_scale * (std::abs(n.x) + std::abs(n.y) + std::abs(n.z));
-    return std::abs(dot(n, centre) - plane) <= reach;
-  });
+  return cells_in(box, std::array<Slab, 1>{Slab{n, plane, plane}}, out);
 }
 
 std::size_t TetGrid::box_cells(const BBox& b) const {
@@ -58,25 +49,67 @@ std::size_t TetGrid::num_cells() const {
          static_cast<std::size_t>(dims_[2]);
 }
 
-template <class Keep>
-std::size_t TetGrid::cells_in(const BBox& box, std::uint32_t* out, const Keep& keep) const {
+template <std::size_t N>
+std::size_t TetGrid::cells_in(const BBox& box, const std::array<Slab, N>& slabs,
+                              std::uint32_t* out) const {
   long lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
   for (int a = 0; a < 3; ++a) {
     lo[a] = cell_of(box.lo[a], a);
     hi[a] = cell_of(box.hi[a], a);
   }
-  const double r = 0.5 * cell_;
+  std::array<double, N> reach;  // the cells' half extent along each slab's normal
+  for (std::size_t f = 0; f < N; ++f) {
+    const Vec3d& n = slabs[f].n;
+    reach[f] = 0.5 * cell_ * (std::abs(n.x) + std::abs(n.y) + std::abs(n.z));
+  }
+  const auto centre = [&](long i, long j, long k) {
+    return box_.lo + Vec3d{(static_cast<double>(i) + 0.5) * cell_,
+                           (static_cast<double>(j) + 0.5) * cell_,
+                           (static_cast<double>(k) + 0.5) * cell_};
+  };
+  const auto keep = [&](const Vec3d& c) {
+    for (std::size_t f = 0; f < N; ++f) {
+      const double d = dot(slabs[f].n, c);
+      if (d - reach[f] > slabs[f].hi || d + reach[f] < slabs[f].lo) return false;
+    }
+    return true;
+  };
   std::size_t count = 0;
   for (long i = lo[0]; i <= hi[0]; ++i)
-    for (long j = lo[1]; j <= hi[1]; ++j)
-      for (long k = lo[2]; k <= hi[2]; ++k) {
-        const Vec3d centre = box_.lo + Vec3d{(static_cast<double>(i) + 0.5) * cell_,
-                                             (static_cast<double>(j) + 0.5) * cell_,
-                                             (static_cast<double>(k) + 0.5) * cell_};
-        if (!keep(centre, r)) continue;
+    for (long j = lo[1]; j <= hi[1]; ++j) {
+      // Each slab bounds the centres' z along the column; the run of k from those bounds,
+      // one cell wider, is trimmed at both ends by the cell test itself.
+      if (hi[2] - lo[2] < 4) {  // a short column: every cell tested
+        for (long k = lo[2]; k <= hi[2]; ++k) {
+          if (!keep(centre(i, j, k))) continue;
+          if (out) out[count] = static_cast<std::uint32_t>((i * dims_[1] + j) * dims_[2] + k);
+          ++count;
+        }
+        continue;
+      }
+      const Vec3d c = centre(i, j, 0);
+      double k_lo = static_cast<double>(lo[2]), k_hi = static_cast<double>(hi[2]);
+      for (std::size_t f = 0; f < N && k_lo <= k_hi; ++f) {
+        const Slab& s = slabs[f];
+        const double across = s.n.x * c.x + s.n.y * c.y;
+        const double z_lo = s.lo - reach[f] - across, z_hi = s.hi + reach[f] - across;
+        if (s.n.z == 0.0) {
+          if (z_lo > 0.0 || z_hi < 0.0) k_lo = k_hi + 1.0;
+          continue;
+        }
+        const double a = z_lo / s.n.z, b = z_hi / s.n.z;  // z of the centres, either order
+        k_lo = std::max(k_lo, std::floor((std::min(a, b) - box_.lo.z) * inv_cell_ - 0.5) - 1.0);
+        k_hi = std::min(k_hi, std::ceil((std::max(a, b) - box_.lo.z) * inv_cell_ - 0.5) + 1.0);
+      }
+      if (!(k_lo <= k_hi)) continue;
+      long first = static_cast<long>(k_lo), last = static_cast<long>(k_hi);
+      while (first <= last && !keep(centre(i, j, first))) ++first;
+      while (last >= first && !keep(centre(i, j, last))) --last;
+      for (long k = first; k <= last; ++k) {
         if (out) out[count] = static_cast<std::uint32_t>((i * dims_[1] + j) * dims_[2] + k);
         ++count;
       }
+    }
   return count;
 }
 
@@ -108,13 +141,12 @@ double grid_cell_size(const std::vector<TetGeometry>& geo, const BBox& all) {
   for (int round = 0; round < 200; ++round) {
     const double cells =
         std::ceil(ext.x / h + 1e-9) * std::ceil(ext.y / h + 1e-9) * std::ceil(ext.z / h + 1e-9);
-    double spanned = 0.0;
+    double columns = 0.0;
     for (const TetGeometry& g : geo) {
       const Vec3d e = g.box.extent();
-      spanned +=
-          (std::floor(e.x / h) + 2.0) * (std::floor(e.y / h) + 2.0) * (std::floor(e.z / h) + 2.0);
+      columns += (std::floor(e.x / h) + 2.0) * (std::floor(e.y / h) + 2.0);
     }
-    if (cells <= 32.0 * n + 64.0 && spanned <= 64.0 * n) break;
+    if (cells <= 32.0 * n + 64.0 && columns <= 64.0 * n) break;
     h *= 1.25;
   }
   return h;

@@ -51,9 +51,17 @@ class TetGrid {
   std::size_t num_cells() const;
 
  private:
-  // Cells of `box` (clamped to the grid) for which keep(centre, half side) holds.
-  template <class Keep>
-  std::size_t cells_in(const BBox& box, std::uint32_t* out, const Keep& keep) const;
+  // The points x with lo <= dot(n, x) <= hi.
+  struct Slab {
+    Vec3d n;
+    double lo, hi;
+  };
+  // Cells of `box` (clamped to the grid) that no slab separates from its body: a cell is kept
+  // unless its centre c has dot(n, c) beyond [lo, hi] by more than the cell's half extent along
+  // n. The kept cells of a column (i, j) are one run of k, found from its ends.
+  template <std::size_t N>
+  std::size_t cells_in(const BBox& box, const std::array<Slab, N>& slabs,
+                       std::uint32_t* out) const;
   long cell_of(double x, int axis) const;
 
   BBox box_;
@@ -67,7 +75,9 @@ BBox bounding_box_of(const std::vector<TetGeometry>& geo);
 /// Cell size (world units) of a TetGrid over `all` for the tets `geo`: about the edge of a cube of
 /// 1.5^3 times the mean tet volume (at least an eighth of the tets' mean box side), so that
 /// slivers enter few cells, made larger until `all` has at most 32 cells per tet and the tets'
-/// boxes span at most 64 cells each on average.
+/// boxes span at most 64 columns (i, j) of cells each on average. Long needles converging on a
+/// point (a sphere's shell) keep small cells: each enters the cells along it, not those of its
+/// box.
 double grid_cell_size(const std::vector<TetGeometry>& geo, const BBox& all);
 
 /// Lists of 32-bit values, one per slot, in one pool: built all at once (as a CSR array), then

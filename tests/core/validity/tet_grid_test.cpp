@@ -1,14 +1,77 @@
-// tet_grid_test.cpp — PooledLists, the cell lists of the broad phase (tet_grid.h): edits of many
-// values at once keep every list ascending and leave the other lists alone.
+// tet_grid_test.cpp — the broad phase (tet_grid.h): the cells TetGrid gives a tet hold every
+// point of it and are those of a test of every cell of its box; PooledLists, the cell lists:
+// edits of many values at once keep every list ascending and leave the other lists alone.
 #include "core/validity/tet_grid.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <random>
 #include <vector>
 
 namespace vdb_shell {
 namespace {
+
+TEST(TetGrid, CellsOfATetHoldItAndAreThoseNoFacePlaneSeparates) {
+  // Random tets over a 20^3 grid: small ones, slivers, and long needles in every direction (whose
+  // cells are found column by column); each tet's cells must hold 2,000 points sampled in it, and
+  // equal the cells of its box that pass the plane test one by one.
+  const BBox box{{-1, -2, -1.5}, {1, 0, 0.5}};
+  const double h = 0.1;
+  const TetGrid grid(box, h);
+  ASSERT_EQ(grid.num_cells(), 8000u);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const auto in_box = [&] {
+    return Vec3d{box.lo.x + 2 * u(rng), box.lo.y + 2 * u(rng), box.lo.z + 2 * u(rng)};
+  };
+  const auto cell_at = [&](const Vec3d& p) {
+    const auto index = [&](double x, double lo) {
+      return std::clamp(static_cast<long>(std::floor((x - lo) / h)), 0L, 19L);
+    };
+    return static_cast<std::uint32_t>(
+        (index(p.x, box.lo.x) * 20 + index(p.y, box.lo.y)) * 20 + index(p.z, box.lo.z));
+  };
+  for (int t = 0; t < 300; ++t) {
+    SCOPED_TRACE("tet " + std::to_string(t));
+    std::array<Vec3d, 4> p;
+    p[0] = in_box();
+    const double size = t % 3 == 1 ? 0.4 : 0.05;
+    for (int k = 1; k < 4; ++k)
+      p[k] = p[0] + Vec3d{size * (u(rng) - 0.5), size * (u(rng) - 0.5), size * (u(rng) - 0.5)};
+    if (t % 3 == 2) p[3] = in_box();  // a needle: one corner far away
+    for (Vec3d& q : p)
+      for (int a = 0; a < 3; ++a) q[a] = std::clamp(q[a], box.lo[a], box.hi[a]);
+    const TetGeometry g = tet_geometry(p);
+    std::vector<std::uint32_t> cells(grid.box_cells(g.box));
+    cells.resize(grid.cells_of(g, cells.data()));
+    ASSERT_TRUE(std::is_sorted(cells.begin(), cells.end()));
+    for (int s = 0; s < 2000; ++s) {
+      double w[4], sum = 0;
+      for (double& x : w) sum += x = -std::log(u(rng) + 1e-300);
+      Vec3d q{};
+      for (int k = 0; k < 4; ++k) q = q + p[k] * (w[k] / sum);
+      ASSERT_TRUE(std::binary_search(cells.begin(), cells.end(), cell_at(q)));
+    }
+    std::vector<std::uint32_t> tested;
+    const auto lo = cell_at(g.box.lo), hi = cell_at(g.box.hi);
+    for (std::uint32_t i = lo / 400; i <= hi / 400; ++i)
+      for (std::uint32_t j = lo / 20 % 20; j <= hi / 20 % 20; ++j)
+        for (std::uint32_t k = lo % 20; k <= hi % 20; ++k) {
+          const Vec3d c = box.lo + Vec3d{(i + 0.5) * h, (j + 0.5) * h, (k + 0.5) * h};
+          bool kept = true;
+          for (int f = 0; f < 4; ++f) {
+            const Vec3d& n = g.n[f];
+            const double d = dot(n, c), reach = 0.5 * h * (std::abs(n.x) + std::abs(n.y) + std::abs(n.z));
+            if (d - reach > g.hi[f] || d + reach < g.lo[f]) kept = false;
+          }
+          if (kept) tested.push_back((i * 20 + j) * 20 + k);
+        }
+    EXPECT_EQ(cells, tested);
+  }
+}
 
 std::vector<std::uint32_t> list_of(const PooledLists& lists, std::size_t s) {
   return {lists.begin(s), lists.end(s)};
