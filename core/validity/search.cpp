@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <memory>
 #include <numeric>
 
 #include "core/assemble/quality.h"
@@ -586,13 +587,14 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
 
   ShellCheckOptions check_options;
   check_options.max_listed = std::numeric_limits<std::size_t>::max();
-  ShellChecker checker(surface, check_options);
+  // Released before the final check, which builds a grid of its own.
+  auto checker = std::make_unique<ShellChecker>(surface, check_options);
   // Inverted tets first: they are found in O(T) and a shell with any is not worth the rest.
   auto check = [&](const TetMesh& mesh) {
     ShellCheckResult volumes = check_volumes(mesh, check_options);
     if (!volumes.valid()) return volumes;
     ++out.checks_run;
-    return checker.check(mesh);
+    return checker->check(mesh);
   };
 
   State s = search.initial();
@@ -715,6 +717,7 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
 
   out.seconds = seconds_since(t0);
   monitor.milestone(0.9);  // the search is done; the final full check is the rest
+  checker.reset();
 
   // The incremental checks trusted unchanged tets; the result carries one full check (the
   // confirmation every run gets, valid search or not: out.checks.seconds, not out.seconds).

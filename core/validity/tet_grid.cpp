@@ -138,6 +138,15 @@ double grid_cell_size(const std::vector<TetGeometry>& geo, const BBox& all) {
   double h = std::max(1.5 * std::cbrt(mean_volume), mean_side / 8.0);
   if (!(h > 0.0)) h = all.max_side() > 0.0 ? all.max_side() : 1.0;
   const Vec3d ext = all.extent();
+  // The mean count of cells a tet enters, over every stride-th tet.
+  const std::size_t stride = std::max<std::size_t>(1, geo.size() / 4096);
+  const auto mean_cells = [&](double side) {
+    const TetGrid grid(all, side);
+    double sum = 0.0, count = 0.0;
+    for (std::size_t t = 0; t < geo.size(); t += stride, ++count)
+      sum += static_cast<double>(grid.cells_of(geo[t], nullptr));
+    return count > 0.0 ? sum / count : 0.0;
+  };
   for (int round = 0; round < 200; ++round) {
     const double cells =
         std::ceil(ext.x / h + 1e-9) * std::ceil(ext.y / h + 1e-9) * std::ceil(ext.z / h + 1e-9);
@@ -146,7 +155,7 @@ double grid_cell_size(const std::vector<TetGeometry>& geo, const BBox& all) {
       const Vec3d e = g.box.extent();
       columns += (std::floor(e.x / h) + 2.0) * (std::floor(e.y / h) + 2.0);
     }
-    if (cells <= 32.0 * n + 64.0 && columns <= 64.0 * n) break;
+    if (cells <= 32.0 * n + 64.0 && columns <= 64.0 * n && mean_cells(h) <= 64.0) break;
     h *= 1.25;
   }
   return h;
