@@ -162,26 +162,24 @@ std::vector<std::uint8_t> ShellChecker::Impl::changed_prisms(
 // The phase, over the surface's box and the first shell's tets `all` (every prism), with a 5%
 // margin, and those tets in it.
 void ShellChecker::Impl::build_phase(const std::vector<MovedPrism>& all) {
-  std::vector<TetGeometry> geo;
-  for (const MovedPrism& p : all) geo.insert(geo.end(), p.geo.begin(), p.geo.begin() + p.count);
+  std::vector<TetGeometry> by_key(3 * surface.triangles.size());  // absent keys: empty boxes
+  for_each_index(all.size(), [&](std::size_t i) {
+    for (std::uint32_t k = 0; k < all[i].count; ++k) by_key[3 * all[i].face + k] = all[i].geo[k];
+  });
+  std::vector<std::uint32_t> keys;
+  for (const MovedPrism& p : all) {
+    for (std::uint32_t k = 0; k < p.count; ++k) keys.push_back(3 * p.face + k);
+    tet_count[p.face] = static_cast<std::uint8_t>(p.count);
+  }
   BBox box = bounding_box(surface);
-  const BBox tets = bounding_box_of(geo);
+  const BBox tets = bounding_box_of(by_key);
   box.expand(tets.lo);
   box.expand(tets.hi);
   const double margin = 0.05 * box.diagonal();
   box.expand(box.lo - Vec3d{margin, margin, margin});
   box.expand(box.hi + Vec3d{margin, margin, margin});
-  std::vector<TetGeometry> by_key(3 * surface.triangles.size());
-  std::vector<std::uint32_t> keys;
-  for (const MovedPrism& p : all) {
-    for (std::uint32_t k = 0; k < p.count; ++k) {
-      keys.push_back(3 * p.face + k);
-      by_key[keys.back()] = p.geo[k];
-    }
-    tet_count[p.face] = static_cast<std::uint8_t>(p.count);
-  }
-  phase = std::make_unique<BroadPhase>(surface, box, grid_cell_size(geo, box), std::move(by_key),
-                                       options.check_leaks);
+  phase = std::make_unique<BroadPhase>(surface, box, grid_cell_size(by_key, box),
+                                       std::move(by_key), options.check_leaks);
   phase->insert(keys);
 }
 

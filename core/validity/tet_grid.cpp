@@ -121,6 +121,7 @@ long TetGrid::cell_of(double x, int axis) const {
 BBox bounding_box_of(const std::vector<TetGeometry>& geo) {
   BBox all;
   for (const TetGeometry& g : geo) {
+    if (g.box.empty()) continue;
     all.expand(g.box.lo);
     all.expand(g.box.hi);
   }
@@ -128,9 +129,11 @@ BBox bounding_box_of(const std::vector<TetGeometry>& geo) {
 }
 
 double grid_cell_size(const std::vector<TetGeometry>& geo, const BBox& all) {
-  const double n = static_cast<double>(geo.size());
+  double n = 0.0;
+  for (const TetGeometry& g : geo) n += g.box.empty() ? 0.0 : 1.0;
   double mean_volume = 0.0, mean_side = 0.0;
   for (const TetGeometry& g : geo) {
+    if (g.box.empty()) continue;
     mean_volume += std::abs(tet_volume(g.p[0], g.p[1], g.p[2], g.p[3])) / n;
     const Vec3d e = g.box.extent();
     mean_side += (e.x + e.y + e.z) / (3.0 * n);
@@ -143,8 +146,11 @@ double grid_cell_size(const std::vector<TetGeometry>& geo, const BBox& all) {
   const auto mean_cells = [&](double side) {
     const TetGrid grid(all, side);
     double sum = 0.0, count = 0.0;
-    for (std::size_t t = 0; t < geo.size(); t += stride, ++count)
-      sum += static_cast<double>(grid.cells_of(geo[t], nullptr));
+    for (std::size_t t = 0; t < geo.size(); t += stride)
+      if (!geo[t].box.empty()) {
+        sum += static_cast<double>(grid.cells_of(geo[t], nullptr));
+        ++count;
+      }
     return count > 0.0 ? sum / count : 0.0;
   };
   for (int round = 0; round < 200; ++round) {
@@ -152,6 +158,7 @@ double grid_cell_size(const std::vector<TetGeometry>& geo, const BBox& all) {
         std::ceil(ext.x / h + 1e-9) * std::ceil(ext.y / h + 1e-9) * std::ceil(ext.z / h + 1e-9);
     double columns = 0.0;
     for (const TetGeometry& g : geo) {
+      if (g.box.empty()) continue;
       const Vec3d e = g.box.extent();
       columns += (std::floor(e.x / h) + 2.0) * (std::floor(e.y / h) + 2.0);
     }
@@ -326,7 +333,7 @@ BroadPhase::BroadPhase(const SurfaceMesh& surface, const BBox& box, double cell_
       cell_slots_(grid_.num_cells()) {
   z_order(geometry, box, slot_, key_);
   geo_.resize(geometry.size());
-  for (std::size_t k = 0; k < geometry.size(); ++k) geo_[slot_[k]] = std::move(geometry[k]);
+  for_each_index(geometry.size(), [&](std::size_t s) { geo_[s] = geometry[key_[s]]; });
   if (enter_triangles) this->enter_triangles();
 }
 

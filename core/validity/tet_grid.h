@@ -69,7 +69,8 @@ class TetGrid {
   long dims_[3] = {1, 1, 1};
 };
 
-/// The box of all of `geo`'s boxes.
+/// The box of all of `geo`'s boxes (those not empty: an empty box marks an absent tet, here and
+/// in grid_cell_size()).
 BBox bounding_box_of(const std::vector<TetGeometry>& geo);
 
 /// Cell size (world units) of a TetGrid over `all` for the tets `geo`: about the edge of a cube of
