@@ -403,7 +403,7 @@ void BroadPhase::insert(const std::vector<std::uint32_t>& keys) {
       for (std::uint64_t k = start[i]; k < start[i + 1]; ++k)
         entries.push_back(std::uint64_t{cells[k]} << 32 | slot);
     }
-    std::sort(entries.begin(), entries.end());
+    parallel_sort(entries.begin(), entries.end());  // distinct entries: the same order always
     std::vector<std::uint32_t> run;
     for (std::size_t i = 0; i < entries.size();) {
       const auto cell = static_cast<std::uint32_t>(entries[i] >> 32);
@@ -436,7 +436,7 @@ void BroadPhase::remove(const std::vector<std::uint32_t>& keys) {
     stray_slots_.erase(std::remove_if(stray_slots_.begin(), stray_slots_.end(),
                                       [&](std::uint32_t k) { return drop[k] != 0; }),
                        stray_slots_.end());
-  std::sort(cells.begin(), cells.end());
+  parallel_sort(cells.begin(), cells.end());  // equal cells are the same value
   cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
   for (const std::uint32_t c : cells) cell_slots_.erase_flagged(c, drop);
 }
