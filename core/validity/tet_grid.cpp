@@ -77,8 +77,6 @@ std::size_t TetGrid::cells_in(const BBox& box, const std::array<Slab, N>& slabs,
   std::size_t count = 0;
   for (long i = lo[0]; i <= hi[0]; ++i)
     for (long j = lo[1]; j <= hi[1]; ++j) {
-      // Each slab bounds the centres' z along the column; the run of k from those bounds,
-      // one cell wider, is trimmed at both ends by the cell test itself.
       if (hi[2] - lo[2] < 4) {  // a short column: every cell tested
         for (long k = lo[2]; k <= hi[2]; ++k) {
           if (!keep(centre(i, j, k))) continue;
@@ -87,6 +85,8 @@ std::size_t TetGrid::cells_in(const BBox& box, const std::array<Slab, N>& slabs,
         }
         continue;
       }
+      // Each slab bounds the centres' z along the column; the run of k from those bounds, one
+      // cell wider, is trimmed at both ends by the cell test itself.
       const Vec3d c = centre(i, j, 0);
       double k_lo = static_cast<double>(lo[2]), k_hi = static_cast<double>(hi[2]);
       for (std::size_t f = 0; f < N && k_lo <= k_hi; ++f) {
