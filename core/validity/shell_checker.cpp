@@ -178,8 +178,8 @@ void ShellChecker::Impl::build_phase(const std::vector<MovedPrism>& all) {
   const double margin = 0.05 * box.diagonal();
   box.expand(box.lo - Vec3d{margin, margin, margin});
   box.expand(box.hi + Vec3d{margin, margin, margin});
-  phase = std::make_unique<BroadPhase>(surface, box, grid_cell_size(by_key, box),
-                                       std::move(by_key), options.check_leaks);
+  phase = std::make_unique<BroadPhase>(surface, box, grid_cell_size(by_key, box), std::move(by_key),
+                                       options.check_leaks);
   phase->insert(keys);
 }
 

@@ -60,8 +60,7 @@ class TetGrid {
   // unless its centre c has dot(n, c) beyond [lo, hi] by more than the cell's half extent along
   // n. The kept cells of a column (i, j) are one run of k, found from its ends.
   template <std::size_t N>
-  std::size_t cells_in(const BBox& box, const std::array<Slab, N>& slabs,
-                       std::uint32_t* out) const;
+  std::size_t cells_in(const BBox& box, const std::array<Slab, N>& slabs, std::uint32_t* out) const;
   long cell_of(double x, int axis) const;
 
   BBox box_;
@@ -128,9 +127,9 @@ class BroadPhase {
  public:
   /// A grid over `box` with cells of side `cell_size` (world units) for the tets of keys
   /// [0, geometry.size()), none entered yet; tet k has the geometry geometry[k] until
-  /// set_geometry() changes it, and the slots follow these geometries. With `enter_triangles`, every triangle of `surface` whose box
-  /// meets `box` is entered in the cells of TetGrid::cells_of_triangle(). `surface` must outlive
-  /// the object.
+  /// set_geometry() changes it (the slots stay those of this first geometry). With
+  /// `enter_triangles`, every triangle of `surface` whose box meets `box` is entered in the cells
+  /// of TetGrid::cells_of_triangle(). `surface` must outlive the object.
   BroadPhase(const SurfaceMesh& surface, const BBox& box, double cell_size,
              std::vector<TetGeometry> geometry, bool enter_triangles);
 

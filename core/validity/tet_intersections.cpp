@@ -56,7 +56,7 @@ std::vector<TetFindings> find_intersections(const BroadPhase& phase,
   // The queries by slot, so that consecutive queries read neighbouring lists and geometry.
   std::vector<std::uint32_t> index_of(phase.key_count(), 0);  // per slot: query index + 1, or 0
   for (std::uint32_t i = 0; i < queries.size(); ++i) index_of[phase.slot(queries[i])] = i + 1;
-  std::vector<std::uint8_t> is_query(phase.key_count(), 0);  // per slot
+  std::vector<std::uint8_t> is_query(phase.key_count(), 0);    // per slot
   std::vector<std::pair<std::uint32_t, std::uint32_t>> order;  // (slot, query index)
   order.reserve(queries.size());
   for (std::uint32_t slot = 0; slot < index_of.size(); ++slot)
@@ -78,7 +78,8 @@ std::vector<TetFindings> find_intersections(const BroadPhase& phase,
           const auto [slot, index] = order[i];
           if (options.check_overlaps)
             find_overlaps(phase, slot, all_queries, is_query, marks, options, found[index]);
-          if (options.check_leaks) found[index].leaking = leaks(phase, slot, inside, marks, options);
+          if (options.check_leaks)
+            found[index].leaking = leaks(phase, slot, inside, marks, options);
         }
       },
       std::max<std::size_t>(16, queries.size() / 32));

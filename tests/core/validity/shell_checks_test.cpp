@@ -389,8 +389,8 @@ TEST(ShellChecks, TetOrderChangesNothingAndEveryOverlapIsFound) {
   const ShellCheckResult b = check_shell(s, shuffled, options);
   std::vector<std::array<std::uint32_t, 2>> mapped;
   for (const auto& pair : b.first_overlapping_pairs)
-    mapped.push_back({std::min(order[pair[0]], order[pair[1]]),
-                      std::max(order[pair[0]], order[pair[1]])});
+    mapped.push_back(
+        {std::min(order[pair[0]], order[pair[1]]), std::max(order[pair[0]], order[pair[1]])});
   std::sort(mapped.begin(), mapped.end());
   EXPECT_EQ(mapped, a.first_overlapping_pairs);
   std::vector<std::uint32_t> leaking;

@@ -31,8 +31,8 @@ TEST(TetGrid, CellsOfATetHoldItAndAreThoseNoFacePlaneSeparates) {
     const auto index = [&](double x, double lo) {
       return std::clamp(static_cast<long>(std::floor((x - lo) / h)), 0L, 19L);
     };
-    return static_cast<std::uint32_t>(
-        (index(p.x, box.lo.x) * 20 + index(p.y, box.lo.y)) * 20 + index(p.z, box.lo.z));
+    return static_cast<std::uint32_t>((index(p.x, box.lo.x) * 20 + index(p.y, box.lo.y)) * 20 +
+                                      index(p.z, box.lo.z));
   };
   for (int t = 0; t < 300; ++t) {
     SCOPED_TRACE("tet " + std::to_string(t));
@@ -64,7 +64,8 @@ TEST(TetGrid, CellsOfATetHoldItAndAreThoseNoFacePlaneSeparates) {
           bool kept = true;
           for (int f = 0; f < 4; ++f) {
             const Vec3d& n = g.n[f];
-            const double d = dot(n, c), reach = 0.5 * h * (std::abs(n.x) + std::abs(n.y) + std::abs(n.z));
+            const double d = dot(n, c),
+                         reach = 0.5 * h * (std::abs(n.x) + std::abs(n.y) + std::abs(n.z));
             if (d - reach > g.hi[f] || d + reach < g.lo[f]) kept = false;
           }
           if (kept) tested.push_back((i * 20 + j) * 20 + k);
