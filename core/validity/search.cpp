@@ -679,8 +679,10 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
             offending.insert(offending.end(), list->begin(), list->end());
           std::vector<std::uint32_t> caps;
           const std::size_t first_cap = n + in.inner_points.size();
-          for (const std::uint32_t p : c.first_outside_vertices)
-            if (p >= first_cap) caps.push_back(search.cap_face(p - first_cap));
+          for (const std::uint32_t p : c.first_outside_vertices) {
+            const std::uint32_t f = p >= first_cap ? search.cap_face(p - first_cap) : UINT32_MAX;
+            if (f != UINT32_MAX) caps.push_back(f);
+          }
           for (const std::uint32_t t : offending) {
             const std::uint32_t f = floor.mesh.source_triangle[t];
             if (search.is_cap(f)) caps.push_back(f);
@@ -693,7 +695,7 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
           std::sort(caps.begin(), caps.end());
           caps.erase(std::unique(caps.begin(), caps.end()), caps.end());
           for (const std::uint32_t f : caps)
-            if (f != UINT32_MAX && search.is_cap(f) && search.drop_cap(f, options.max_floor_drops))
+            if (search.drop_cap(f, options.max_floor_drops))
               for (const std::uint32_t v : surface.triangles[f]) {
                 lowered[v] = 1;
                 progress = true;

@@ -77,32 +77,29 @@ std::size_t TetGrid::cells_in(const BBox& box, const std::array<Slab, N>& slabs,
   std::size_t count = 0;
   for (long i = lo[0]; i <= hi[0]; ++i)
     for (long j = lo[1]; j <= hi[1]; ++j) {
-      if (hi[2] - lo[2] < 4) {  // a short column: every cell tested
-        for (long k = lo[2]; k <= hi[2]; ++k) {
-          if (!keep(centre(i, j, k))) continue;
-          if (out) out[count] = static_cast<std::uint32_t>((i * dims_[1] + j) * dims_[2] + k);
-          ++count;
+      long first = lo[2], last = hi[2];
+      if (last - first >= 4) {
+        // Each slab bounds the centres' z along the column: the run of k between those bounds,
+        // one cell wider (a short column is taken whole).
+        const Vec3d c = centre(i, j, 0);
+        double k_lo = static_cast<double>(first), k_hi = static_cast<double>(last);
+        for (std::size_t f = 0; f < N && k_lo <= k_hi; ++f) {
+          const Slab& s = slabs[f];
+          const double across = s.n.x * c.x + s.n.y * c.y;
+          const double z_lo = s.lo - reach[f] - across, z_hi = s.hi + reach[f] - across;
+          if (s.n.z == 0.0) {
+            if (z_lo > 0.0 || z_hi < 0.0) k_lo = k_hi + 1.0;
+            continue;
+          }
+          const double a = z_lo / s.n.z, b = z_hi / s.n.z;  // z of the centres, either order
+          k_lo = std::max(k_lo, std::floor((std::min(a, b) - box_.lo.z) * inv_cell_ - 0.5) - 1.0);
+          k_hi = std::min(k_hi, std::ceil((std::max(a, b) - box_.lo.z) * inv_cell_ - 0.5) + 1.0);
         }
-        continue;
+        if (!(k_lo <= k_hi)) continue;
+        first = static_cast<long>(k_lo);
+        last = static_cast<long>(k_hi);
       }
-      // Each slab bounds the centres' z along the column; the run of k from those bounds, one
-      // cell wider, is trimmed at both ends by the cell test itself.
-      const Vec3d c = centre(i, j, 0);
-      double k_lo = static_cast<double>(lo[2]), k_hi = static_cast<double>(hi[2]);
-      for (std::size_t f = 0; f < N && k_lo <= k_hi; ++f) {
-        const Slab& s = slabs[f];
-        const double across = s.n.x * c.x + s.n.y * c.y;
-        const double z_lo = s.lo - reach[f] - across, z_hi = s.hi + reach[f] - across;
-        if (s.n.z == 0.0) {
-          if (z_lo > 0.0 || z_hi < 0.0) k_lo = k_hi + 1.0;
-          continue;
-        }
-        const double a = z_lo / s.n.z, b = z_hi / s.n.z;  // z of the centres, either order
-        k_lo = std::max(k_lo, std::floor((std::min(a, b) - box_.lo.z) * inv_cell_ - 0.5) - 1.0);
-        k_hi = std::min(k_hi, std::ceil((std::max(a, b) - box_.lo.z) * inv_cell_ - 0.5) + 1.0);
-      }
-      if (!(k_lo <= k_hi)) continue;
-      long first = static_cast<long>(k_lo), last = static_cast<long>(k_hi);
+      // The kept cells are one run: trimmed at both ends by the cell test itself.
       while (first <= last && !keep(centre(i, j, first))) ++first;
       while (last >= first && !keep(centre(i, j, last))) --last;
       for (long k = first; k <= last; ++k) {

@@ -1422,7 +1422,8 @@ class Suite:
             pk = c["maxrss_kib"]
             add("%s at 1024^3: peak memory" % label,
                 "%.0f MiB" % (pk / 1024.0),
-                "<= %.0f GiB (%.0f MiB)" % (TARGET_1024_PEAK_KIB / 1048576.0, TARGET_1024_PEAK_KIB / 1024.0),
+                "<= %.0f GiB (%.0f MiB)" % (TARGET_1024_PEAK_KIB / 1048576.0,
+                                            TARGET_1024_PEAK_KIB / 1024.0),
                 pk <= TARGET_1024_PEAK_KIB,
                 ("%.0f MiB over" % ((pk - TARGET_1024_PEAK_KIB) / 1024.0))
                 if pk > TARGET_1024_PEAK_KIB else

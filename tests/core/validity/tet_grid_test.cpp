@@ -15,7 +15,7 @@ namespace vdb_shell {
 namespace {
 
 TEST(TetGrid, CellsOfATetHoldItAndAreThoseNoFacePlaneSeparates) {
-  // Random tets over a 20^3 grid: small ones, slivers, and long needles in every direction (whose
+  // Random tets over a 20^3 grid: small ones, large ones, and needles in every direction (whose
   // cells are found column by column); each tet's cells must hold 2,000 points sampled in it, and
   // equal the cells of its box that pass the plane test one by one.
   const BBox box{{-1, -2, -1.5}, {1, 0, 0.5}};
