@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <limits>
 #include <string>
 
@@ -85,16 +86,34 @@ PrismTets split_prism(const std::array<std::uint32_t, 6>& ids) {
   return out;
 }
 
+std::vector<double> layer_fractions(int layers, double ratio) {
+  std::vector<double> at(static_cast<std::size_t>(layers) + 1, 0.0);
+  double thickness = 1, sum = 0;  // layer k is ratio^k thick, then all are scaled to sum to 1
+  for (int k = 1; k <= layers; ++k, thickness *= ratio) at[k] = sum += thickness;
+  for (double& a : at) a /= sum;
+  at.back() = 1.0;
+  return at;
+}
+
 AssembleResult assemble_shell(const SurfaceMesh& surface, const ShellInput& input,
                               const AssembleOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   const std::size_t n_surface = surface.points.size();
   const std::size_t n_inner = input.inner_points.size();
+  const int layers = options.layers;
+  if (layers < 1 || layers > kMaxLayers || !(options.layer_ratio > 0) ||
+      !std::isfinite(options.layer_ratio))
+    throw InputError("assemble_shell: " + std::to_string(layers) + " layers of ratio " +
+                     std::to_string(options.layer_ratio) + "; give 1 to " +
+                     std::to_string(kMaxLayers) + " layers and a positive ratio");
   if (input.inner_id.size() != n_surface)
     throw InputError("assemble_shell: " + std::to_string(input.inner_id.size()) +
                      " inner ids for " + std::to_string(n_surface) +
                      " surface vertices; give one inner id per surface vertex");
-  const std::size_t n_points = n_surface + n_inner + input.cap_points.size();
+  std::size_t off_surface = 0;
+  for (const std::uint32_t i : input.inner_id) off_surface += i != kOnSurface;
+  const std::size_t n_before_layers = n_surface + n_inner + input.cap_points.size();
+  const std::size_t n_points = n_before_layers + off_surface * static_cast<std::size_t>(layers - 1);
   if (n_points > std::numeric_limits<std::uint32_t>::max())
     throw InputError("assemble_shell: " + std::to_string(n_points) +
                      " points do not fit 32-bit indices");
@@ -157,13 +176,35 @@ AssembleResult assemble_shell(const SurfaceMesh& surface, const ShellInput& inpu
     double& t = mesh.thickness[n_surface + i];
     t = std::max(t, distance(surface.points[v], input.inner_points[i]));
   }
+  // Layer points: vertex v's layer boundary k (0 < k < layers) is layer_point[v] + k - 1.
+  std::vector<std::uint32_t> layer_point(n_surface, UINT32_MAX);
+  if (layers > 1) {
+    const std::vector<double> at = layer_fractions(layers, options.layer_ratio);
+    mesh.points.reserve(n_points);
+    for (std::uint32_t v = 0; v < n_surface; ++v) {
+      const std::uint32_t i = input.inner_id[v];
+      if (i == kOnSurface) continue;
+      layer_point[v] = static_cast<std::uint32_t>(mesh.points.size());
+      const Vec3d& s = surface.points[v];
+      const Vec3d edge = input.inner_points[i] - s;
+      for (int k = 1; k < layers; ++k) {
+        mesh.points.push_back(s + edge * at[k]);
+        mesh.inner.push_back(1);
+        mesh.surface_vertex.push_back(v);
+        mesh.thickness.push_back(norm(edge) * at[k]);
+      }
+    }
+  }
   const std::size_t n_used = static_cast<std::size_t>(std::count(used.begin(), used.end(), 1));
   result.welded_inner_vertices = n_surface - result.on_surface_vertices - n_used;
   result.unused_inner_points = n_inner - n_used;
 
   const std::size_t n_faces = surface.triangles.size();
-  mesh.tets.reserve(3 * n_faces);
-  mesh.source_triangle.reserve(3 * n_faces);
+  const std::size_t max_tets = 3 * n_faces * static_cast<std::size_t>(layers);
+  mesh.tets.reserve(max_tets);
+  mesh.source_triangle.reserve(max_tets);
+  mesh.layer.reserve(max_tets);
+  std::vector<std::uint32_t> levels(3 * static_cast<std::size_t>(layers + 1));
   for (std::size_t f = 0; f < n_faces; ++f) {
     const Triangle& tri = surface.triangles[f];
     const std::uint32_t a = tri[0], b = tri[1], c = tri[2];
@@ -175,6 +216,7 @@ AssembleResult assemble_shell(const SurfaceMesh& surface, const ShellInput& inpu
       const std::uint32_t x = static_cast<std::uint32_t>(n_surface + n_inner + cap_of[f]);
       mesh.tets.push_back({a, b, x, c});
       mesh.source_triangle.push_back(static_cast<std::uint32_t>(f));
+      mesh.layer.push_back(1);
       mesh.thickness[x] = std::max({distance(mesh.points[x], surface.points[a]),
                                     distance(mesh.points[x], surface.points[b]),
                                     distance(mesh.points[x], surface.points[c])});
@@ -183,12 +225,19 @@ AssembleResult assemble_shell(const SurfaceMesh& surface, const ShellInput& inpu
     }
     const std::uint32_t ai = inner(a), bi = inner(b), ci = inner(c);
     if (ai == bi && bi == ci) ++result.collapsed_prisms;
-    const PrismTets prism = split_prism({a, b, c, ai, bi, ci});
-    for (int k = 0; k < prism.count; ++k) {
-      mesh.tets.push_back(prism.tets[k]);
-      mesh.source_triangle.push_back(static_cast<std::uint32_t>(f));
+    for (int c = 0; c < 3; ++c) {
+      const std::uint32_t v = tri[c];
+      levels[c] = v;
+      levels[3 * layers + c] = inner(v);
+      for (int k = 1; k < layers; ++k)
+        levels[3 * k + c] = layer_point[v] == UINT32_MAX ? v : layer_point[v] + k - 1;
     }
-    result.dropped_degenerate_tets += static_cast<std::size_t>(prism.dropped);
+    const int dropped = split_layered_prism(levels.data(), layers, [&](const Tet& t, int layer) {
+      mesh.tets.push_back(t);
+      mesh.source_triangle.push_back(static_cast<std::uint32_t>(f));
+      mesh.layer.push_back(static_cast<std::uint8_t>(layer));
+    });
+    result.dropped_degenerate_tets += static_cast<std::size_t>(dropped);
   }
   if (options.compute_quality) mesh.quality = tet_qualities(mesh);
   result.seconds = seconds_since(start);

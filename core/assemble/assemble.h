@@ -39,13 +39,30 @@ namespace vdb_shell {
 struct AssembleOptions {
   /// Fill TetMesh::quality with the volume-length ratio of every tet (quality.h).
   bool compute_quality = true;
+  /// Layers through the thickness (--layers): every prism becomes `layers` prisms stacked along
+  /// its straight side edges (split_layered_prism()), up to 3 * layers tets.
+  int layers = 1;
+  /// Thickness of each layer over the one outside it (--layer-ratio): geometric growth from the
+  /// surface inward, as boundary-layer meshers grade their layers (layer_fractions()).
+  double layer_ratio = 1.0;
 };
+
+/// Most layers assemble_shell() builds (TetMesh::layer is 8 bits; the pipeline checks --layers).
+inline constexpr int kMaxLayers = 64;
+
+/// Where the layer boundaries lie along a side edge from the surface vertex (0) to its inner
+/// vertex (1): layers + 1 fractions, 0 and 1 included; each layer is `ratio` times as thick as
+/// the one outside it.
+std::vector<double> layer_fractions(int layers, double ratio);
 
 /// The shell and what assembling it did.
 struct AssembleResult {
-  /// points: the surface points (same indices), then inner_points (surface index count + i);
-  /// tets: positive when their prism is not inverted; source_triangle and (optionally)
-  /// quality per tet; inner (1 for inner points) and thickness per point.
+  /// points: the surface points (same indices), then inner_points (surface index count + i),
+  /// then cap_points, then (layers > 1) the layer points: for every surface vertex off the
+  /// surface, in vertex order, the layers - 1 points between it and its inner vertex, outermost
+  /// first; tets: positive when their prism is not inverted; source_triangle, layer and
+  /// (optionally) quality per tet; inner (1 for inner and layer points), thickness and
+  /// surface_vertex per point.
   TetMesh mesh;
   std::size_t dropped_degenerate_tets = 0;  ///< tets with a repeated vertex, dropped
   std::size_t collapsed_prisms = 0;         ///< prisms whose three inner vertices are one
@@ -79,11 +96,30 @@ struct PrismTets {
 /// conventions. Tets with a repeated index are dropped.
 PrismTets split_prism(const std::array<std::uint32_t, 6>& ids);
 
+/// Splits the prism with corner ids `levels` cut into layers: levels[3 k + i] is corner i of
+/// layer boundary k (k = 0: the outer triangle a, b, c; k = layers: a', b', c'; a corner on the
+/// surface repeats its id at every level). Layer k + 1 is the prism between boundaries k and
+/// k + 1, split by split_prism(): its side quads are cut by the global-index rule too, so
+/// neighbouring prisms stay conforming layer by layer. Calls emit(tet, layer) for every tet
+/// (layer 1 at the outer surface) and returns how many tets were dropped.
+template <class Emit>
+int split_layered_prism(const std::uint32_t* levels, int layers, const Emit& emit) {
+  int dropped = 0;
+  for (int k = 0; k < layers; ++k) {
+    const std::uint32_t* lo = levels + 3 * k;
+    const PrismTets p = split_prism({lo[0], lo[1], lo[2], lo[3], lo[4], lo[5]});
+    for (int i = 0; i < p.count; ++i) emit(p.tets[i], k + 1);
+    dropped += p.dropped;
+  }
+  return dropped;
+}
+
 /// Builds the tet shell of `surface` with the inner vertices `input`.
 /// \pre surface is closed and outward oriented (load_surface()); input.inner_points lie inside.
 ///      Neither is checked here: check_shell() (shell_checks.h) verifies the result.
 /// \throw InputError if input.inner_id does not have one entry per surface vertex, an inner id
-///        or a triangle index is out of range, or the point count does not fit 32-bit indices.
+///        or a triangle index is out of range, the point count does not fit 32-bit indices, or
+///        options.layers is outside [1, kMaxLayers] or options.layer_ratio is not positive.
 AssembleResult assemble_shell(const SurfaceMesh& surface, const ShellInput& input,
                               const AssembleOptions& options = {});
 

@@ -28,8 +28,11 @@ struct TetMesh {
   // Optional per-element data (empty, or one entry per tet / per point).
   std::vector<double> quality;                 ///< per tet: volume-length ratio, regular = 1
   std::vector<std::uint32_t> source_triangle;  ///< per tet: index of its input triangle
-  std::vector<std::uint8_t> inner;             ///< per point: 1 for traced (inner) vertices
-  std::vector<double> thickness;               ///< per point: trace length, world units
+  /// per tet: its layer through the thickness, 1 at the outer surface to K at the inner one
+  /// (--layers K; AssembleOptions::layers)
+  std::vector<std::uint8_t> layer;
+  std::vector<std::uint8_t> inner;  ///< per point: 1 for traced (inner) vertices
+  std::vector<double> thickness;    ///< per point: trace length, world units
   /// per point: the surface vertex it belongs to (itself for surface points; for an inner point
   /// the smallest surface vertex whose inner vertex it is)
   std::vector<std::uint32_t> surface_vertex;

@@ -61,7 +61,8 @@ std::vector<std::uint32_t> check_elements(const SurfaceMesh& surface, const TetM
   validate_tet_mesh(mesh);
   result.tets = mesh.tets.size();
   result.faces = surface.triangles.size();
-  result.too_many_tets = result.tets > 3 * result.faces + options.extra_tets;
+  result.too_many_tets =
+      result.tets > 3 * result.faces * std::size_t(options.layers) + options.extra_tets;
   count_volumes(mesh, options, result);
   count_moved_surface_points(surface, mesh, options, result);
   std::vector<std::uint32_t> inner_points;

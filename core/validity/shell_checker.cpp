@@ -3,12 +3,12 @@
 //
 // One BroadPhase (tet_grid.h) over the surface's box, grown to hold the first shell, is built at
 // the first call, with the surface triangles entered once and tet k of prism f entered under the
-// key 3 * f + k. A call moves the tets of the prisms that changed and runs the narrow phase
-// (tet_intersections.h) for the "dirty" prisms — changed since the previous call, or offending
-// in it — only; every other pair is trusted: both its tets are where they were when the pair was
-// last tested, and it passed. The element checks are check_shell()'s (check_steps.h), with
-// two caches: the boundary faces, which depend on the tets' vertex indices only, and whether each
-// distinct inner point position is outside.
+// key P f + k, P = 3 * ShellCheckOptions::layers the most tets of a prism. A call moves the tets of
+// the prisms that changed and runs the narrow phase (tet_intersections.h) for the "dirty" prisms —
+// changed since the previous call, or offending in it — only; every other pair is trusted: both its
+// tets are where they were when the pair was last tested, and it passed. The element checks are
+// check_shell()'s (check_steps.h), with two caches: the boundary faces, which depend on the tets'
+// vertex indices only, and whether each distinct inner point position is outside.
 #include <algorithm>
 #include <array>
 #include <map>
@@ -16,6 +16,7 @@
 #include <string>
 #include <utility>
 
+#include "core/assemble/assemble.h"
 #include "core/base/errors.h"
 #include "core/base/parallel.h"
 #include "core/base/timer.h"
@@ -30,8 +31,10 @@ namespace vdb_shell {
 namespace {
 
 // Per prism f (its source triangle): its first tet in the mesh, first[f]; first[F] = T.
-// \throw InputError unless the tets are grouped by source triangle in order, at most 3 each.
-std::vector<std::uint32_t> prism_starts(const TetMesh& mesh, std::size_t n_faces) {
+// \throw InputError unless the tets are grouped by source triangle in order, at most
+//        `per_prism` each.
+std::vector<std::uint32_t> prism_starts(const TetMesh& mesh, std::size_t n_faces,
+                                        std::uint32_t per_prism) {
   const std::size_t n = mesh.tets.size();
   if (mesh.source_triangle.size() != n)
     throw InputError(
@@ -47,9 +50,11 @@ std::vector<std::uint32_t> prism_starts(const TetMesh& mesh, std::size_t n_faces
     ++first[f + 1];
   }
   for (std::size_t f = 0; f < n_faces; ++f) {
-    if (first[f + 1] > 3)
-      throw InputError("ShellChecker: triangle " + std::to_string(f) +
-                       " has more than 3 tets; pass an assemble_shell() result");
+    if (first[f + 1] > per_prism)
+      throw InputError("ShellChecker: triangle " + std::to_string(f) + " has more than " +
+                       std::to_string(per_prism) +
+                       " tets; pass an assemble_shell() result of as many layers as "
+                       "ShellCheckOptions::layers");
     first[f + 1] += first[f];
   }
   return first;
@@ -71,19 +76,28 @@ struct ShellChecker::Impl {
   Impl(const SurfaceMesh& s, const ShellCheckOptions& o)
       : surface(s),
         options(o),
+        per_prism(3 * static_cast<std::uint32_t>(o.layers)),
         inside(s, on_surface_distance(s, o)),
         tet_count(s.triangles.size(), 0),
-        offended(s.triangles.size(), 0) {}
+        offended(s.triangles.size(), 0) {
+    if (o.layers < 1 || o.layers > kMaxLayers ||
+        std::uint64_t(per_prism) * s.triangles.size() > UINT32_MAX)
+      throw InputError("ShellChecker: " + std::to_string(o.layers) + " layers of " +
+                       std::to_string(s.triangles.size()) + " prisms; give 1 to " +
+                       std::to_string(kMaxLayers) + " layers and fewer than " +
+                       std::to_string(UINT32_MAX / per_prism) + " triangles");
+  }
 
-  // The new tets of a prism that moved.
-  struct MovedPrism {
-    std::uint32_t face = 0;
-    std::uint32_t count = 0;
-    std::array<TetGeometry, 3> geo;
+  // The new tets of the prisms that moved: prism i is faces[i], its tets' geometry
+  // geo[P i, P i + count[i]).
+  struct MovedPrisms {
+    std::vector<std::uint32_t> faces, count;
+    std::vector<TetGeometry> geo;
   };
 
   const SurfaceMesh& surface;
   ShellCheckOptions options;
+  std::uint32_t per_prism;  // P: the most tets of a prism
   InsideTester inside;
   std::unique_ptr<BroadPhase> phase;    // from the first call on
   std::vector<std::uint8_t> tet_count;  // per prism: its tets in `phase`
@@ -97,7 +111,7 @@ struct ShellChecker::Impl {
                           ShellCheckResult& result);
   std::vector<std::uint8_t> changed_prisms(const TetMesh& mesh,
                                            const std::vector<std::uint32_t>& first) const;
-  void build_phase(const std::vector<MovedPrism>& all);
+  void build_phase(const MovedPrisms& all);
   void move_prisms(const TetMesh& mesh, const std::vector<std::uint32_t>& first,
                    const std::vector<std::uint32_t>& moved);
   void check_intersections(const TetMesh& mesh, const std::vector<std::uint32_t>& first,
@@ -153,7 +167,7 @@ std::vector<std::uint8_t> ShellChecker::Impl::changed_prisms(
   for_each_index(n_faces, [&](std::size_t f) {
     bool same = tet_count[f] == first[f + 1] - first[f];
     for (std::uint32_t t = first[f]; same && t < first[f + 1]; ++t)
-      same = tet_corners(mesh, t) == phase->geometry(3 * f + (t - first[f])).p;
+      same = tet_corners(mesh, t) == phase->geometry(per_prism * f + (t - first[f])).p;
     changed[f] = same ? 0 : 1;
   });
   return changed;
@@ -161,15 +175,17 @@ std::vector<std::uint8_t> ShellChecker::Impl::changed_prisms(
 
 // The phase, over the surface's box and the first shell's tets `all` (every prism), with a 5%
 // margin, and those tets in it.
-void ShellChecker::Impl::build_phase(const std::vector<MovedPrism>& all) {
-  std::vector<TetGeometry> by_key(3 * surface.triangles.size());  // absent keys: empty boxes
-  for_each_index(all.size(), [&](std::size_t i) {
-    for (std::uint32_t k = 0; k < all[i].count; ++k) by_key[3 * all[i].face + k] = all[i].geo[k];
+void ShellChecker::Impl::build_phase(const MovedPrisms& all) {
+  const std::uint32_t P = per_prism;
+  std::vector<TetGeometry> by_key(P * surface.triangles.size());  // absent keys: empty boxes
+  for_each_index(all.faces.size(), [&](std::size_t i) {
+    for (std::uint32_t k = 0; k < all.count[i]; ++k)
+      by_key[P * all.faces[i] + k] = all.geo[P * i + k];
   });
   std::vector<std::uint32_t> keys;
-  for (const MovedPrism& p : all) {
-    for (std::uint32_t k = 0; k < p.count; ++k) keys.push_back(3 * p.face + k);
-    tet_count[p.face] = static_cast<std::uint8_t>(p.count);
+  for (std::size_t i = 0; i < all.faces.size(); ++i) {
+    for (std::uint32_t k = 0; k < all.count[i]; ++k) keys.push_back(P * all.faces[i] + k);
+    tet_count[all.faces[i]] = static_cast<std::uint8_t>(all.count[i]);
   }
   BBox box = bounding_box(surface);
   const BBox tets = bounding_box_of(by_key);
@@ -187,29 +203,33 @@ void ShellChecker::Impl::build_phase(const std::vector<MovedPrism>& all) {
 // lists); builds the phase at the first call.
 void ShellChecker::Impl::move_prisms(const TetMesh& mesh, const std::vector<std::uint32_t>& first,
                                      const std::vector<std::uint32_t>& moved) {
-  std::vector<MovedPrism> fresh(moved.size());
+  const std::uint32_t P = per_prism;
+  MovedPrisms fresh;
+  fresh.faces = moved;
+  fresh.count.resize(moved.size());
+  fresh.geo.resize(P * moved.size());
   for_each_index(moved.size(), [&](std::size_t i) {
-    MovedPrism& p = fresh[i];
-    p.face = moved[i];
-    p.count = first[p.face + 1] - first[p.face];
-    for (std::uint32_t t = first[p.face]; t < first[p.face + 1]; ++t)
-      p.geo[t - first[p.face]] = tet_geometry(tet_corners(mesh, t));
+    const std::uint32_t f = moved[i];
+    fresh.count[i] = first[f + 1] - first[f];
+    for (std::uint32_t t = first[f]; t < first[f + 1]; ++t)
+      fresh.geo[P * i + (t - first[f])] = tet_geometry(tet_corners(mesh, t));
   });
   if (!phase) {
     build_phase(fresh);
     return;
   }
   std::vector<std::uint32_t> keys;
-  for (const MovedPrism& p : fresh)
-    for (std::uint32_t k = 0; k < tet_count[p.face]; ++k) keys.push_back(3 * p.face + k);
+  for (const std::uint32_t f : moved)
+    for (std::uint32_t k = 0; k < tet_count[f]; ++k) keys.push_back(P * f + k);
   phase->remove(keys);
   keys.clear();
-  for (const MovedPrism& p : fresh) {
-    for (std::uint32_t k = 0; k < p.count; ++k) {
-      keys.push_back(3 * p.face + k);
-      phase->set_geometry(keys.back(), p.geo[k]);
+  for (std::size_t i = 0; i < moved.size(); ++i) {
+    const std::uint32_t f = moved[i];
+    for (std::uint32_t k = 0; k < fresh.count[i]; ++k) {
+      keys.push_back(P * f + k);
+      phase->set_geometry(keys.back(), fresh.geo[P * i + k]);
     }
-    tet_count[p.face] = static_cast<std::uint8_t>(p.count);
+    tet_count[f] = static_cast<std::uint8_t>(fresh.count[i]);
   }
   phase->insert(keys);
 }
@@ -222,10 +242,11 @@ void ShellChecker::Impl::check_intersections(const TetMesh& mesh,
                                              ShellCheckResult& result) {
   std::vector<std::uint32_t> queries;
   for (const std::uint32_t f : dirty)
-    for (std::uint32_t k = 0; k < tet_count[f]; ++k) queries.push_back(3 * f + k);
+    for (std::uint32_t k = 0; k < tet_count[f]; ++k) queries.push_back(per_prism * f + k);
   const std::vector<TetFindings> found = find_intersections(*phase, queries, inside, options);
   const Intersections offenders = record_intersections(
-      found, queries, [&](std::uint32_t key) { return first[key / 3] + key % 3; }, options, result);
+      found, queries, [&](std::uint32_t key) { return first[key / per_prism] + key % per_prism; },
+      options, result);
   std::fill(offended.begin(), offended.end(), 0);
   const auto offend = [&](std::uint32_t t) { offended[mesh.source_triangle[t]] = 1; };
   for (const auto& pair : offenders.pairs) {
@@ -249,7 +270,8 @@ ShellCheckResult ShellChecker::check(const TetMesh& mesh) {
   m.check_faces(mesh, result);
   m.check_inner_points(mesh, inner_points, result);
   if (m.options.check_overlaps || m.options.check_leaks) {
-    const std::vector<std::uint32_t> first = prism_starts(mesh, m.surface.triangles.size());
+    const std::vector<std::uint32_t> first =
+        prism_starts(mesh, m.surface.triangles.size(), m.per_prism);
     const std::vector<std::uint8_t> changed = m.changed_prisms(mesh, first);
     std::vector<std::uint32_t> moved, dirty;
     for (std::uint32_t f = 0; f < changed.size(); ++f) {

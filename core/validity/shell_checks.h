@@ -21,7 +21,7 @@
 //   * leaking tets: tets that reach outside the surface although their vertices may all be
 //     inside or on it — a surface triangle crosses their interior (separating-axis test with
 //     the same tolerance; touching does not count), or their centroid is outside;
-//   * T <= 3F.
+//   * T <= 3F (3 K F with K layers, plus the tets of sector gaps: ShellCheckOptions).
 // Lengths are world units; tolerances are relative (dimensionless), as documented per field.
 //
 // Not checked: thickness limits (they depend on the trace options).
@@ -55,8 +55,11 @@ struct ShellCheckOptions {
   bool check_overlaps = true;
   /// Run the leak test (surface triangles crossing tets, centroids outside).
   bool check_leaks = true;
-  /// Tets allowed beyond 3 per surface triangle (the gaps between sectors of folded vertices,
-  /// sector_shell.h).
+  /// Layers of prisms through the thickness (AssembleOptions::layers): a surface triangle has up
+  /// to 3 * layers tets.
+  int layers = 1;
+  /// Tets allowed beyond 3 * layers per surface triangle (the gaps between sectors of folded
+  /// vertices, sector_shell.h).
   std::size_t extra_tets = 0;
   /// How many offending elements each list in the result keeps (lowest indices first);
   /// std::numeric_limits<std::size_t>::max() lists all of them.
@@ -98,7 +101,7 @@ struct ShellCheckResult {
   std::size_t leaking_tets = 0;  ///< tets crossed by a surface triangle or centroid outside
   std::vector<std::uint32_t> first_leaking_tets;
 
-  bool too_many_tets = false;  ///< T > 3F + ShellCheckOptions::extra_tets
+  bool too_many_tets = false;  ///< T > 3 layers F + ShellCheckOptions::extra_tets
 
   double seconds = 0.0;  ///< wall time of check_shell()
 
@@ -129,14 +132,14 @@ bool tets_overlap(const std::array<Vec3d, 4>& a, const std::array<Vec3d, 4>& b,
 /// prisms — the search of make_valid_shell() — at a cost that follows the prisms that changed.
 ///
 /// Every mesh must be an assemble_shell() result (assemble.h): tets grouped by
-/// TetMesh::source_triangle in triangle order, at most 3 per triangle. Volumes and surface
-/// points are checked in full on every call, boundary faces whenever the tets' vertex indices
-/// changed (they depend on nothing else), inner points once per distinct position. The overlap
-/// and leak tests only test the tets of "dirty" prisms — whose tets moved since the previous
-/// call, or that offended in it — against all others, and trust every other pair: both its tets
-/// are where they were when the pair last passed. The listed offenders therefore always involve
-/// a dirty prism, and valid() is check_shell()'s verdict. A grid over the surface's box is built
-/// once, at the first call, and the tets of a prism are moved in it when the prism moves.
+/// TetMesh::source_triangle in triangle order, at most 3 * ShellCheckOptions::layers per triangle.
+/// Volumes and surface points are checked in full on every call, boundary faces whenever the tets'
+/// vertex indices changed (they depend on nothing else), inner points once per distinct position.
+/// The overlap and leak tests only test the tets of "dirty" prisms — whose tets moved since the
+/// previous call, or that offended in it — against all others, and trust every other pair: both its
+/// tets are where they were when the pair last passed. The listed offenders therefore always
+/// involve a dirty prism, and valid() is check_shell()'s verdict. A grid over the surface's box is
+/// built once, at the first call, and the tets of a prism are moved in it when the prism moves.
 class ShellChecker {
  public:
   explicit ShellChecker(const SurfaceMesh& surface, const ShellCheckOptions& options = {});

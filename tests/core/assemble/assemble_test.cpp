@@ -1,6 +1,8 @@
 // assemble_test.cpp — assemble_shell() and split_prism() (core/assemble/assemble.h): the prism
 // split (all 720 index orders, welding), whole shells on closed surfaces (conformity,
-// orientation, boundary faces, T == 3F), surface vertices and cap faces, inconsistent input.
+// orientation, boundary faces, T == 3F), surface vertices and cap faces, layers through the
+// thickness (T == 3KF, layer points on the side edges, conformity layer by layer), inconsistent
+// input.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -378,6 +380,105 @@ TEST(Assemble, UnusedInnerPointsAreKeptAndCounted) {
   EXPECT_EQ(r.mesh.tets.size(), 24u);
 }
 
+TEST(Assemble, LayerFractionsGrowGeometricallyFromTheSurface) {
+  const std::vector<double> even = layer_fractions(4, 1.0);
+  ASSERT_EQ(even.size(), 5u);
+  for (int k = 0; k <= 4; ++k) EXPECT_NEAR(even[k], k / 4.0, 1e-15);
+  // Thicknesses 1, 1.5, 2.25 over their sum 4.75.
+  const std::vector<double> graded = layer_fractions(3, 1.5);
+  ASSERT_EQ(graded.size(), 4u);
+  EXPECT_EQ(graded[0], 0.0);
+  EXPECT_NEAR(graded[1], 1 / 4.75, 1e-15);
+  EXPECT_NEAR(graded[2], 2.5 / 4.75, 1e-15);
+  EXPECT_EQ(graded[3], 1.0);
+  EXPECT_EQ(layer_fractions(1, 2.0), (std::vector<double>{0.0, 1.0}));
+}
+
+TEST(Assemble, LayersStackConformingPrismsAlongTheSideEdges) {
+  for (const double ratio : {1.0, 1.5})
+    for (const SurfaceMesh& s : {octahedron(), make_shape("sphere", 1)}) {
+      const ShellInput in = scaled_input(s, 0.4);
+      const int K = 4;
+      AssembleOptions o;
+      o.layers = K;
+      o.layer_ratio = ratio;
+      const AssembleResult r = assemble_shell(s, in, o);
+      const TetMesh& m = r.mesh;
+      const std::size_t n = s.points.size();
+      ASSERT_EQ(m.tets.size(), 3 * K * s.num_faces());
+      ASSERT_EQ(m.points.size(), 2 * n + n * (K - 1));
+      ASSERT_EQ(m.layer.size(), m.tets.size());
+      // Layer points: vertex v's, outermost first, on its edge at the fractions.
+      const std::vector<double> at = layer_fractions(K, ratio);
+      for (std::uint32_t v = 0; v < n; ++v)
+        for (int k = 1; k < K; ++k) {
+          const std::size_t p = 2 * n + v * (K - 1) + (k - 1);
+          const Vec3d want = s.points[v] + (in.inner_points[v] - s.points[v]) * at[k];
+          EXPECT_LT(distance(m.points[p], want), 1e-12);
+          EXPECT_EQ(m.surface_vertex[p], v);
+          EXPECT_EQ(m.inner[p], 1);
+        }
+      // Positive tets; every face of one tet is an input or inner triangle, all others of two
+      // tets (conforming); each prism has 3 tets in each layer.
+      for (const Tet& t : m.tets) EXPECT_GT(volume(m, t), 0.0);
+      std::set<Key> boundary;
+      for (const Triangle& t : s.triangles) {
+        boundary.insert(sorted_key(t[0], t[1], t[2]));
+        boundary.insert(sorted_key(static_cast<std::uint32_t>(n + t[0]),
+                                   static_cast<std::uint32_t>(n + t[1]),
+                                   static_cast<std::uint32_t>(n + t[2])));
+      }
+      for (const auto& [key, c] : face_counts(m)) EXPECT_EQ(c, boundary.count(key) ? 1 : 2);
+      std::map<std::pair<std::uint32_t, int>, int> per_layer;
+      for (std::size_t t = 0; t < m.tets.size(); ++t)
+        ++per_layer[{m.source_triangle[t], m.layer[t]}];
+      EXPECT_EQ(per_layer.size(), K * s.num_faces());
+      for (const auto& [key, c] : per_layer) EXPECT_EQ(c, 3);
+      // Tets of layer k lie between layer boundaries k - 1 and k: every corner of vertex v at
+      // fraction at[k - 1] or at[k] of v's edge.
+      for (std::size_t t = 0; t < m.tets.size(); ++t)
+        for (const std::uint32_t p : m.tets[t]) {
+          const std::uint32_t v = m.surface_vertex[p];
+          const double f =
+              distance(m.points[p], s.points[v]) / distance(in.inner_points[v], s.points[v]);
+          const int k = m.layer[t];
+          EXPECT_TRUE(std::abs(f - at[k - 1]) < 1e-9 || std::abs(f - at[k]) < 1e-9)
+              << "tet " << t << " layer " << k << " corner at " << f;
+        }
+      ShellCheckOptions layered;
+      layered.layers = K;
+      const ShellCheckResult c = check_shell(s, m, layered);
+      EXPECT_TRUE(c.valid()) << describe_problems(c);
+      EXPECT_TRUE(check_shell(s, m).too_many_tets);  // more than 3F for a one-layer check
+      // The layers fill the same volume as one layer would (the side quads are planar here).
+      EXPECT_NEAR(summarize_quality(s, m).coverage,
+                  summarize_quality(s, assemble_shell(s, in).mesh).coverage, 1e-12);
+    }
+}
+
+TEST(Assemble, LayersKeepSurfaceVerticesAndWeldsAsOneLayerDoes) {
+  // Octahedron vertex 0 on the surface, vertices 1 and 3 welded: their prisms lose the tets
+  // with a repeated point in every layer (on the surface) or in the innermost one (welded).
+  const SurfaceMesh s = octahedron();
+  ShellInput in = scaled_input(s, 0.5);
+  in.inner_id[0] = kOnSurface;
+  in.inner_id[3] = in.inner_id[1];
+  in.inner_points[1] = {-0.3, -0.3, 0.05};
+  ASSERT_TRUE(check_shell(s, assemble_shell(s, in).mesh).valid());  // as one layer
+  AssembleOptions o;
+  o.layers = 3;
+  const AssembleResult r = assemble_shell(s, in, o);
+  for (const Tet& t : r.mesh.tets) EXPECT_GT(volume(r.mesh, t), 0.0);
+  ShellCheckOptions layered;
+  layered.layers = 3;
+  const ShellCheckResult c = check_shell(s, r.mesh, layered);
+  EXPECT_TRUE(c.valid()) << describe_problems(c);
+  // 5 vertices off the surface, 2 layer points each; no layer point for vertex 0.
+  EXPECT_EQ(r.mesh.points.size(), 6u + 6u + 5u * 2u);
+  for (std::size_t p = 12; p < r.mesh.points.size(); ++p) EXPECT_NE(r.mesh.surface_vertex[p], 0u);
+  EXPECT_EQ(r.on_surface_vertices, 1u);
+}
+
 TEST(Assemble, RejectsInconsistentInput) {
   const SurfaceMesh s = octahedron();
   ShellInput in = scaled_input(s, 0.5);
@@ -386,6 +487,15 @@ TEST(Assemble, RejectsInconsistentInput) {
   in = scaled_input(s, 0.5);
   in.inner_id[2] = 6;
   EXPECT_THROW(assemble_shell(s, in), InputError);
+  in = scaled_input(s, 0.5);
+  AssembleOptions o;
+  for (const int layers : {0, kMaxLayers + 1}) {
+    o.layers = layers;
+    EXPECT_THROW(assemble_shell(s, in, o), InputError) << layers;
+  }
+  o.layers = 2;
+  o.layer_ratio = 0;
+  EXPECT_THROW(assemble_shell(s, in, o), InputError);
 }
 
 }  // namespace
