@@ -29,20 +29,48 @@ struct Worst {
   }
 };
 
-/// Worst of the tets `around` point `moved` with that point at `at`.
-Worst worst_with(const TetMesh& mesh, IndexLists::Range around, std::uint32_t moved,
-                 const Vec3d& at) {
+/// Worst of the tets `ring`.
+Worst worst_of(const TetMesh& mesh, IndexLists::Range ring) {
   Worst w;
-  for (const std::uint32_t t : around) {
+  for (const std::uint32_t t : ring) {
     const Tet& tet = mesh.tets[t];
-    const auto p = [&](int k) -> const Vec3d& {
-      return tet[k] == moved ? at : mesh.points[tet[k]];
-    };
-    w.quality = std::min(w.quality, tet_quality(p(0), p(1), p(2), p(3)));
-    w.dihedral = std::min(w.dihedral, tet_min_dihedral_deg(p(0), p(1), p(2), p(3)));
-    w.volume += tet_volume(p(0), p(1), p(2), p(3));
+    const Vec3d &a = mesh.points[tet[0]], &b = mesh.points[tet[1]], &c = mesh.points[tet[2]],
+                &d = mesh.points[tet[3]];
+    w.quality = std::min(w.quality, tet_quality(a, b, c, d));
+    w.dihedral = std::min(w.dihedral, tet_min_dihedral_deg(a, b, c, d));
+    w.volume += tet_volume(a, b, c, d);
   }
   return w;
+}
+
+/// The layer points of a layered shell (assemble.h): each moves with an inner point, on the
+/// straight edge from its surface vertex, at a fixed fraction of it.
+struct LayerPoints {
+  std::vector<std::uint32_t> point, vertex;  ///< per layer point: its index, its surface vertex
+  std::vector<double> at;                    ///< its fraction of the edge
+  IndexLists of;                             ///< inner point -> its layer points (indices here)
+};
+
+LayerPoints layer_points(const SurfaceMesh& surface, const ShellInput& input,
+                         const AssembleOptions& assemble) {
+  LayerPoints lp;
+  const int K = assemble.layers;
+  if (K > 1) {
+    const std::vector<double> at = layer_fractions(K, assemble.layer_ratio);
+    auto next = static_cast<std::uint32_t>(surface.points.size() + input.inner_points.size() +
+                                           input.cap_points.size());
+    for (std::uint32_t v = 0; v < surface.points.size(); ++v)
+      if (input.inner_id[v] != kOnSurface)
+        for (int k = 1; k < K; ++k) {
+          lp.point.push_back(next++);
+          lp.vertex.push_back(v);
+          lp.at.push_back(at[k]);
+        }
+  }
+  lp.of.build(input.inner_points.size(), [&](auto emit) {
+    for (std::uint32_t d = 0; d < lp.point.size(); ++d) emit(input.inner_id[lp.vertex[d]], d);
+  });
+  return lp;
 }
 
 }  // namespace
@@ -58,8 +86,9 @@ OptimizeReport optimize_shell(const SurfaceMesh& surface, const std::vector<doub
   const std::uint32_t n = static_cast<std::uint32_t>(surface.points.size());
   const std::size_t n_inner = input.inner_points.size();
 
-  // Owners: the surface vertices whose inner vertex each inner point is; incident tets.
-  IndexLists owners, around;
+  // Owners: the surface vertices whose inner vertex each inner point is; incident tets; the
+  // layer points moving with each inner point and the ring of tets a move changes.
+  IndexLists owners, around, ring;
   owners.build(n_inner, [&](auto emit) {
     for (std::uint32_t v = 0; v < n; ++v)
       if (input.inner_id[v] != kOnSurface) emit(input.inner_id[v], v);
@@ -68,9 +97,32 @@ OptimizeReport optimize_shell(const SurfaceMesh& surface, const std::vector<doub
     for (std::uint32_t t = 0; t < mesh.tets.size(); ++t)
       for (const std::uint32_t v : mesh.tets[t]) emit(v, t);
   });
+  const LayerPoints layer = layer_points(surface, input, valid.assemble);
+  {
+    std::vector<std::uint32_t> tets;
+    ring.build(n_inner, [&](auto emit) {
+      for (std::uint32_t i = 0; i < n_inner; ++i) {
+        tets.assign(around[n + i].begin(), around[n + i].end());
+        for (const std::uint32_t d : layer.of[i])
+          tets.insert(tets.end(), around[layer.point[d]].begin(), around[layer.point[d]].end());
+        std::sort(tets.begin(), tets.end());
+        tets.erase(std::unique(tets.begin(), tets.end()), tets.end());
+        for (const std::uint32_t t : tets) emit(i, t);
+      }
+    });
+  }
+  // Inner point i at `at`, its layer points with it.
+  const auto place = [&](std::uint32_t i, const Vec3d& at) {
+    mesh.points[n + i] = at;
+    for (const std::uint32_t d : layer.of[i]) {
+      const Vec3d& s = surface.points[layer.vertex[d]];
+      mesh.points[layer.point[d]] = s + (at - s) * layer.at[d];
+    }
+  };
 
   ShellCheckOptions check_options;
   check_options.max_listed = std::numeric_limits<std::size_t>::max();
+  check_options.layers = valid.assemble.layers;
   ShellChecker checker(surface, check_options);
   ShellCheckResult checks = checker.check(mesh);
   ++report.checks;
@@ -87,7 +139,7 @@ OptimizeReport optimize_shell(const SurfaceMesh& surface, const std::vector<doub
   double spent = 0;
 
   std::vector<std::uint32_t> order(n_inner);
-  std::vector<Worst> worst_of(n_inner);
+  std::vector<Worst> worst_before(n_inner);
   std::vector<std::uint8_t> taken(mesh.points.size());
   for (int sweep = 0; sweep < options.sweeps; ++sweep) {
     moved.clear();
@@ -95,18 +147,20 @@ OptimizeReport optimize_shell(const SurfaceMesh& surface, const std::vector<doub
     // The worst vertices first; a vertex moves only if no vertex moved in this sweep shares a
     // tet with it, so every tet has at most one corner moved per sweep: each move was judged
     // on the tets as they end up, and any subset of the moves can be undone exactly.
-    for (std::uint32_t i = 0; i < n_inner; ++i)
-      worst_of[i] = worst_with(mesh, around[n + i], n + i, mesh.points[n + i]);
+    for (std::uint32_t i = 0; i < n_inner; ++i) worst_before[i] = worst_of(mesh, ring[i]);
     std::iota(order.begin(), order.end(), 0u);
     std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
-      return worst_of[a].quality < worst_of[b].quality;
+      return worst_before[a].quality < worst_before[b].quality;
     });
     std::fill(taken.begin(), taken.end(), 0);
     for (const std::uint32_t i : order) {
       const std::uint32_t pi = n + i;
-      if (frozen[i] || owners[i].size() == 0 || taken[pi]) continue;
+      if (frozen[i] || owners[i].size() == 0 || taken[pi] ||
+          std::any_of(layer.of[i].begin(), layer.of[i].end(),
+                      [&](std::uint32_t d) { return taken[layer.point[d]] != 0; }))
+        continue;
       const Vec3d p = mesh.points[pi];
-      const Worst& worst = worst_of[i];
+      const Worst& worst = worst_before[i];
       Vec3d target{};
       double weights = 0;
       for (const std::uint32_t t : around[pi]) {
@@ -141,17 +195,18 @@ OptimizeReport optimize_shell(const SurfaceMesh& surface, const std::vector<doub
         for (const std::uint32_t v : owners[i])
           if (distance(candidate, surface.points[v]) > limit[v]) within = false;
         if (!within) continue;
-        const Worst after = worst_with(mesh, around[pi], pi, candidate);
+        place(i, candidate);
+        const Worst after = worst_of(mesh, ring[i]);
         const double lost = std::max(0.0, worst.volume - after.volume);
         if (after.improves_on(worst) && spent + lost <= budget) {
           spent += lost;
           moved.push_back(i);
           before.push_back(p);
-          mesh.points[pi] = candidate;
-          for (const std::uint32_t t : around[pi])
+          for (const std::uint32_t t : ring[i])
             for (const std::uint32_t v : mesh.tets[t]) taken[v] = 1;
           break;
         }
+        place(i, p);
       }
     }
     if (moved.empty()) break;
@@ -171,17 +226,19 @@ OptimizeReport optimize_shell(const SurfaceMesh& surface, const std::vector<doub
       for (const std::uint32_t v : checks.first_outside_vertices) bad[v] = 1;
       std::size_t undone = 0;
       for (std::size_t k = 0; k < moved.size(); ++k) {
-        const std::uint32_t pi = n + moved[k];
-        if (!bad[pi] || mesh.points[pi] == before[k]) continue;
-        mesh.points[pi] = before[k];
-        frozen[moved[k]] = 1;
+        const std::uint32_t i = moved[k];
+        const bool offends =
+            bad[n + i] || std::any_of(layer.of[i].begin(), layer.of[i].end(),
+                                      [&](std::uint32_t d) { return bad[layer.point[d]] != 0; });
+        if (!offends || mesh.points[n + i] == before[k]) continue;
+        place(i, before[k]);
+        frozen[i] = 1;
         ++undone;
       }
       if (undone == 0) {  // offenders among no moved vertex: undo the whole sweep
         for (std::size_t k = 0; k < moved.size(); ++k) {
-          Vec3d& at = mesh.points[n + moved[k]];
-          report.reverted += at != before[k];  // not counted again if undone above
-          at = before[k];
+          report.reverted += mesh.points[n + moved[k]] != before[k];  // not counted again
+          place(moved[k], before[k]);
         }
         checks = checker.check(mesh);
         ++report.checks;
@@ -208,7 +265,11 @@ OptimizeReport optimize_shell(const SurfaceMesh& surface, const std::vector<doub
     double t = 0;
     for (const std::uint32_t v : owners[i])
       t = std::max(t, distance(surface.points[v], mesh.points[pi]));
-    if (!mesh.thickness.empty()) mesh.thickness[pi] = t;
+    if (mesh.thickness.empty()) continue;
+    mesh.thickness[pi] = t;
+    for (const std::uint32_t d : layer.of[i])
+      mesh.thickness[layer.point[d]] =
+          distance(surface.points[layer.vertex[d]], mesh.points[layer.point[d]]);
   }
   mesh.quality = tet_qualities(mesh);
   valid.checks = checks;

@@ -11,6 +11,7 @@
 #include <numeric>
 
 #include "core/assemble/quality.h"
+#include "core/base/errors.h"
 #include "core/base/index_lists.h"
 #include "core/base/timer.h"
 #include "core/inner/sectors.h"
@@ -91,6 +92,8 @@ class ShellSearch {
     }
     floor_fraction_ = options.floor_fraction;
     floor_drop_ = options.floor_drop;
+    layers_ = options.layers;
+    layer_at_ = layer_fractions(options.layers, options.layer_ratio);
     update_caps();
   }
 
@@ -185,63 +188,78 @@ class ShellSearch {
     return s;
   }
 
-  /// Prism f as assemble_shell() would build it from build(s): the same ids (their order is all
-  /// the split depends on) and positions, and its tets.
+  /// Prism f as assemble_shell() would build it from build(s): ids in the same order as the
+  /// assembled mesh's (all the splits depend on) — ids[3 k + c] is corner c at layer boundary k
+  /// (surface vertex v, inner vertex n + its group's key or n + v, layer point 2n +
+  /// (layers - 1) v + k - 1) — their positions, and its tets.
   struct LocalPrism {
     std::uint32_t face = 0;
-    std::array<std::uint32_t, 6> ids{};
-    std::array<Vec3d, 6> at;
-    PrismTets tets;
-    std::array<Vec3d, 4> corners(int i) const {
+    std::vector<std::uint32_t> ids;
+    std::vector<Vec3d> at;
+    std::vector<Tet> tets;
+    bool cap = false;  ///< one tet to a cap point (ids[3])
+    std::array<Vec3d, 4> corners(const Tet& t) const {
       std::array<Vec3d, 4> p;
-      for (int c = 0; c < 4; ++c)
-        p[c] = at[std::find(ids.begin(), ids.end(), tets.tets[i][c]) - ids.begin()];
+      for (int c = 0; c < 4; ++c) p[c] = at[std::find(ids.begin(), ids.end(), t[c]) - ids.begin()];
       return p;
     }
+    std::array<Vec3d, 4> corners(std::size_t i) const { return corners(tets[i]); }
   };
-  LocalPrism prism(const State& s, std::uint32_t f) const {
+  /// Fills `p` with prism f of state `s` (its buffers are reused).
+  void prism(const State& s, std::uint32_t f, LocalPrism& p) const {
     const auto n = static_cast<std::uint32_t>(full_.size());
     const Triangle& tri = surface_.triangles[f];
-    LocalPrism p;
+    const int K = layers_;
     p.face = f;
-    for (int k = 0; k < 3; ++k) {
-      const std::uint32_t v = tri[k];
-      p.ids[k] = v;
-      p.at[k] = surface_.points[v];
+    p.ids.resize(3 * static_cast<std::size_t>(K + 1));
+    p.at.resize(p.ids.size());
+    p.tets.clear();
+    p.cap = false;
+    for (int c = 0; c < 3; ++c) {
+      const std::uint32_t v = tri[c];
+      const Vec3d& sv = surface_.points[v];
+      p.ids[c] = v;
+      p.at[c] = sv;
+      std::uint32_t& inner = p.ids[3 * K + c];
+      Vec3d& inner_at = p.at[3 * K + c];
       if (s.t[v] == 0) {
-        p.ids[k + 3] = v;
-        p.at[k + 3] = p.at[k];
+        inner = v;
+        inner_at = sv;
       } else if (s.welded[v]) {
         const std::uint32_t g = start_.input.inner_id[v];
-        p.ids[k + 3] = n + group_key_[g];
-        p.at[k + 3] = start_.input.inner_points[g];
+        inner = n + group_key_[g];
+        inner_at = start_.input.inner_points[g];
       } else {
-        p.ids[k + 3] = n + v;
-        p.at[k + 3] = cached_position(v, s.t[v]);
+        inner = n + v;
+        inner_at = cached_position(v, s.t[v]);
+      }
+      for (int k = 1; k < K; ++k) {
+        const std::size_t at = 3 * static_cast<std::size_t>(k) + c;
+        p.ids[at] = s.t[v] == 0 ? v : 2 * n + (K - 1) * v + k - 1;
+        p.at[at] = sv + (inner_at - sv) * layer_at_[k];
       }
     }
     const auto cap = std::lower_bound(caps_.cap_faces.begin(), caps_.cap_faces.end(), f);
     if (cap != caps_.cap_faces.end() && *cap == f) {  // as assemble_shell(): one tet, no mover
       p.ids[3] = UINT32_MAX;
       p.at[3] = caps_.cap_points[static_cast<std::size_t>(cap - caps_.cap_faces.begin())];
-      p.tets.count = 1;
-      p.tets.tets[0] = {p.ids[0], p.ids[1], p.ids[3], p.ids[2]};
-      return p;
+      p.tets.push_back({p.ids[0], p.ids[1], p.ids[3], p.ids[2]});
+      p.cap = true;
+      return;
     }
-    p.tets = split_prism(p.ids);
-    return p;
+    split_layered_prism(p.ids.data(), K, [&](const Tet& t, int) { p.tets.push_back(t); });
   }
 
-  /// The surface vertex owning the deepest movable inner corner of tet i of `p` (as the rounds
-  /// choose it), or UINT32_MAX when every inner corner is at its floor.
-  std::uint32_t deepest_corner(const State& s, const LocalPrism& p, int i) const {
+  /// The surface vertex owning the deepest movable inner corner of `tet`, a tet of `p` (as the
+  /// rounds choose it), or UINT32_MAX when every inner corner is at its floor.
+  std::uint32_t deepest_corner(const State& s, const LocalPrism& p, const Tet& tet) const {
     const auto n = static_cast<std::uint32_t>(full_.size());
     const Triangle& tri = surface_.triangles[p.face];
     std::uint32_t best = UINT32_MAX;
     double best_depth = 0;
-    for (const std::uint32_t id : p.tets.tets[i]) {
+    for (const std::uint32_t id : tet) {  // inner and layer points move with their vertex
       if (id < n) continue;
-      const auto corner = std::find(p.ids.begin() + 3, p.ids.end(), id) - p.ids.begin() - 3;
+      const auto corner = (std::find(p.ids.begin() + 3, p.ids.end(), id) - p.ids.begin()) % 3;
       const std::uint32_t v = tri[corner];
       const double d = s.welded[v] ? group_depth_[start_.input.inner_id[v]]
                                    : (s.t[v] > floor_[v] ? s.t[v] : 0.0);
@@ -276,7 +294,10 @@ class ShellSearch {
   /// Steps back, as a round does for an inverted or flat tet (its deepest movable inner corner),
   /// until every tet of the prisms in `queue`, and of the prisms around every vertex moved on
   /// the way, is positive with a quality of at least `min_quality`, or has all its inner
-  /// corners at their floor (left to the checks; a sliver there is no violation).
+  /// corners at their floor (left to the checks; a sliver there is no violation). With K
+  /// layers, the whole prism's 3 tets (split_prism() of its outer and inner triangles) must
+  /// reach `min_quality` and each layer's tets min_quality / K: a layer is 1 / K as thick, so
+  /// its tets are about K times flatter than the prism's, which stepping back does not cure.
   /// Local and serial. Marks the moved vertices in `lowered`; returns how many left their weld.
   std::size_t settle_volumes(State& s, std::vector<std::uint32_t> queue, double shrink,
                              double zero_volume_tolerance, double min_quality,
@@ -292,20 +313,36 @@ class ShellSearch {
         }
     };
     std::size_t unwelded = 0;
+    LocalPrism p;
     for (std::size_t head = 0; head < queue.size(); ++head) {
       if ((head & 1023) == 1023) monitor_.alive();
       const std::uint32_t f = queue[head];
       queued[f] = 0;
-      const LocalPrism p = prism(s, f);
-      for (int i = 0; i < p.tets.count; ++i) {
+      prism(s, f, p);
+      const bool whole = layers_ == 1 || p.cap;  // p.tets are the prism's own 3 tets
+      const double layer_quality = whole ? min_quality : min_quality / layers_;
+      bool stepped = false;
+      for (std::size_t i = 0; i < p.tets.size() && !stepped; ++i) {
         const std::array<Vec3d, 4> c = p.corners(i);
         if (tet_volume_class(c, zero_volume_tolerance) == TetVolume::kPositive &&
-            !(tet_quality(c[0], c[1], c[2], c[3]) < min_quality))
+            !(tet_quality(c[0], c[1], c[2], c[3]) < layer_quality))
           continue;
-        const std::uint32_t v = deepest_corner(s, p, i);
+        const std::uint32_t v = deepest_corner(s, p, p.tets[i]);
         if (v == UINT32_MAX) continue;  // at the floor: left to the checks
         unwelded += step_back(s, v, shrink, moved);
-        break;  // the prism is queued again
+        stepped = true;  // the prism is queued again
+      }
+      if (stepped || whole || !(min_quality > 0)) continue;
+      const std::uint32_t* inner = p.ids.data() + 3 * layers_;
+      const PrismTets prism_tets =
+          split_prism({p.ids[0], p.ids[1], p.ids[2], inner[0], inner[1], inner[2]});
+      for (int i = 0; i < prism_tets.count; ++i) {
+        const std::array<Vec3d, 4> c = p.corners(prism_tets.tets[i]);
+        if (!(tet_quality(c[0], c[1], c[2], c[3]) < min_quality)) continue;
+        const std::uint32_t v = deepest_corner(s, p, prism_tets.tets[i]);
+        if (v == UINT32_MAX) continue;
+        unwelded += step_back(s, v, shrink, moved);
+        break;
       }
     }
     return unwelded;
@@ -320,16 +357,18 @@ class ShellSearch {
                               std::vector<char>& lowered) const {
     std::size_t unwelded = 0;
     std::vector<std::uint32_t> step, around, moved;
+    LocalPrism a, b;
     for (const auto& [f, g] : pairs) {
       monitor_.alive();
       for (;;) {
-        const LocalPrism a = prism(s, f), b = prism(s, g);
+        prism(s, f, a);
+        prism(s, g, b);
         step.clear();
-        for (int i = 0; i < a.tets.count; ++i)
-          for (int j = f == g ? i + 1 : 0; j < b.tets.count; ++j) {
+        for (std::size_t i = 0; i < a.tets.size(); ++i)
+          for (std::size_t j = f == g ? i + 1 : 0; j < b.tets.size(); ++j) {
             if (!tets_overlap(a.corners(i), b.corners(j), options)) continue;
-            step.push_back(deepest_corner(s, a, i));
-            step.push_back(deepest_corner(s, b, j));
+            step.push_back(deepest_corner(s, a, a.tets[i]));
+            step.push_back(deepest_corner(s, b, b.tets[j]));
           }
         std::sort(step.begin(), step.end());
         step.erase(std::unique(step.begin(), step.end()), step.end());
@@ -444,6 +483,8 @@ class ShellSearch {
   std::vector<std::uint32_t> folded_;       ///< on the surface (t_v = 0), ascending
   double floor_fraction_ = 0;               ///< ValidityOptions::floor_fraction
   double floor_drop_ = 1;                   ///< ValidityOptions::floor_drop
+  int layers_ = 1;                          ///< ValidityOptions::layers
+  std::vector<double> layer_at_;            ///< layer_fractions() of the layers
   std::map<std::uint32_t, int> cap_drops_;  ///< per cap face: how often its depth was dropped
   std::vector<int> drops_;                  ///< per vertex: how often its floor was lowered
   ShellInput caps_;                         ///< cap_faces and cap_points only
@@ -452,17 +493,40 @@ class ShellSearch {
   mutable std::vector<Vec3d> cached_position_;
 };
 
+/// The inner slot each point of an assembled shell moves with: an inner point's own, a layer
+/// point's surface vertex's; UINT32_MAX for surface and cap points (they never move).
+class PointSlots {
+ public:
+  PointSlots(const SurfaceMesh& surface, const ShellInput& in, const TetMesh& mesh)
+      : in_(in),
+        mesh_(mesh),
+        n_(static_cast<std::uint32_t>(surface.points.size())),
+        n_slots_(static_cast<std::uint32_t>(in.inner_points.size())),
+        first_layer_point_(n_ + n_slots_ + static_cast<std::uint32_t>(in.cap_points.size())) {}
+  std::uint32_t operator()(std::uint32_t p) const {
+    if (p < n_) return UINT32_MAX;
+    if (p < n_ + n_slots_) return p - n_;
+    if (p < first_layer_point_) return UINT32_MAX;
+    return in_.inner_id[mesh_.surface_vertex[p]];
+  }
+
+ private:
+  const ShellInput& in_;
+  const TetMesh& mesh_;
+  std::uint32_t n_, n_slots_, first_layer_point_;
+};
+
 /// Offending tets (overlapping pairs aside) and inner slots of a check.
-void collect_offenders(const SurfaceMesh& surface, const ShellInput& in, const ShellCheckResult& c,
-                       std::vector<std::uint32_t>& tets, std::vector<std::uint32_t>& slots) {
-  const std::uint32_t n = static_cast<std::uint32_t>(surface.points.size());
+void collect_offenders(const SurfaceMesh& surface, const ShellInput& in, const PointSlots& slot_of,
+                       const ShellCheckResult& c, std::vector<std::uint32_t>& tets,
+                       std::vector<std::uint32_t>& slots) {
   tets.clear();
   slots.clear();
   tets.insert(tets.end(), c.first_inverted_tets.begin(), c.first_inverted_tets.end());
   tets.insert(tets.end(), c.first_zero_volume_tets.begin(), c.first_zero_volume_tets.end());
   tets.insert(tets.end(), c.first_leaking_tets.begin(), c.first_leaking_tets.end());
   for (std::uint32_t p : c.first_outside_vertices)
-    if (p >= n) slots.push_back(p - n);
+    if (slot_of(p) != UINT32_MAX) slots.push_back(slot_of(p));
   for (const auto* list :
        {&c.first_missing_triangles, &c.first_shared_triangles, &c.first_misoriented_triangles})
     for (std::uint32_t f : *list)
@@ -503,12 +567,12 @@ void count_moved_back(const ShellSearch& search, const State& s, ValidShell& out
 /// lowers the floors of the offenders' vertices (the overlapping prisms', the offending tets'
 /// and slots' members), a bounded number of times each. Returns whether any floor was lowered.
 bool drop_floors(ShellSearch& search, State& s, const SurfaceMesh& surface, const TetMesh& mesh,
+                 const PointSlots& slot_of,
                  const std::vector<std::array<std::uint32_t, 2>>& prism_pairs,
                  const std::vector<std::uint32_t>& bad_tets,
                  const std::vector<std::uint32_t>& bad_slots, const IndexLists& members,
                  std::uint32_t n_slots, const ValidityOptions& options, std::vector<char>& lowered,
                  std::size_t& floor_drops) {
-  const std::uint32_t n = static_cast<std::uint32_t>(surface.points.size());
   bool dropped = false;
   auto drop = [&](std::uint32_t v) {
     if (lowered[v] || s.t[v] == 0 ||
@@ -524,8 +588,8 @@ bool drop_floors(ShellSearch& search, State& s, const SurfaceMesh& surface, cons
       for (const std::uint32_t v : surface.triangles[face]) drop(v);
   for (std::uint32_t t : bad_tets)
     for (std::uint32_t p : mesh.tets[t])
-      if (p >= n && p - n < n_slots)
-        for (std::uint32_t v : members[p - n]) drop(v);
+      if (slot_of(p) != UINT32_MAX)
+        for (std::uint32_t v : members[slot_of(p)]) drop(v);
   for (std::uint32_t slot : bad_slots)
     if (slot < n_slots)
       for (std::uint32_t v : members[slot]) drop(v);
@@ -579,16 +643,25 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
                             const StageMonitor& monitor) {
   const auto t0 = std::chrono::steady_clock::now();
   const std::uint32_t n = static_cast<std::uint32_t>(surface.points.size());
+  if (std::uint64_t(options.layers + 1) * n > UINT32_MAX)  // LocalPrism's layer point ids
+    throw InputError("make_valid_shell: " + std::to_string(n) + " surface vertices with " +
+                     std::to_string(options.layers) +
+                     " layers do not fit 32-bit point indices; use fewer layers");
   ShellSearch search(surface, traces, start, options, monitor);
   ValidShell out;
   IndexLists members;  ///< slot -> its surface vertices
-  AssembleOptions no_quality;
+  out.assemble.layers = options.layers;
+  out.assemble.layer_ratio = options.layer_ratio;
+  AssembleOptions no_quality = out.assemble;
   no_quality.compute_quality = false;
 
   ShellCheckOptions check_options;
   check_options.max_listed = std::numeric_limits<std::size_t>::max();
+  check_options.layers = options.layers;
   // Released before the final check, which builds a grid of its own.
   auto checker = std::make_unique<ShellChecker>(surface, check_options);
+  ShellCheckOptions first_few;  // the final check's: the first few offenders of each kind
+  first_few.layers = options.layers;
   // Inverted tets first: they are found in O(T) and a shell with any is not worth the rest.
   auto check = [&](const TetMesh& mesh) {
     ShellCheckResult volumes = check_volumes(mesh, check_options);
@@ -615,7 +688,8 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
       out.shell = assemble_shell(surface, out.input, no_quality);
       out.checks = check(out.shell.mesh);
       if (out.checks.valid() || out.rounds >= options.max_rounds) break;
-      collect_offenders(surface, out.input, out.checks, bad_tets, bad_slots);
+      const PointSlots slot_of(surface, out.input, out.shell.mesh);
+      collect_offenders(surface, out.input, slot_of, out.checks, bad_tets, bad_slots);
       // Progress: the share of the first round's offenders gone (the final check is the last 10%).
       const double offenders =
           double(bad_tets.size() + bad_slots.size() + out.checks.first_overlapping_pairs.size());
@@ -630,7 +704,7 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
       const auto n_slots = static_cast<std::uint32_t>(out.input.inner_points.size());
       auto slot_depth = [&](std::uint32_t slot) {
         double d = 0;
-        if (slot >= n_slots) return d;  // a cap point: never moves
+        if (slot >= n_slots) return d;  // not an inner slot: nothing to move
         for (std::uint32_t v : members[slot])
           if (s.welded[v] || s.t[v] > search.floor()[v]) d = std::max(d, s.t[v]);
         return d;  // 0: every member at its floor, nothing to move
@@ -647,11 +721,12 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
         std::uint32_t best = UINT32_MAX;
         double best_depth = 0;
         for (std::uint32_t p : out.shell.mesh.tets[t]) {
-          if (p < n) continue;
-          const double d = slot_depth(p - n);
+          const std::uint32_t slot = slot_of(p);
+          if (slot == UINT32_MAX) continue;
+          const double d = slot_depth(slot);
           if (d > best_depth) {
             best_depth = d;
-            best = p - n;
+            best = slot;
           }
         }
         if (best != UINT32_MAX) lower(best);
@@ -659,8 +734,8 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
       for (std::uint32_t slot : bad_slots)
         if (slot_depth(slot) > 0) lower(slot);
       if (!progress) {
-        progress = drop_floors(search, s, surface, out.shell.mesh, prism_pairs, bad_tets, bad_slots,
-                               members, n_slots, options, lowered, out.floor_drops);
+        progress = drop_floors(search, s, surface, out.shell.mesh, slot_of, prism_pairs, bad_tets,
+                               bad_slots, members, n_slots, options, lowered, out.floor_drops);
       }
       if (!progress) {
         // The floors are as low as they go: the floor configuration itself must be invalid.
@@ -707,7 +782,7 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
         }
         out.floor_valid = c.valid();
         if (!out.floor_valid)  // the first few of each kind
-          out.floor_problems = describe_problems(check_shell(surface, floor.mesh));
+          out.floor_problems = describe_problems(check_shell(surface, floor.mesh, first_few));
         out.stalled = true;
         break;
       }
@@ -723,11 +798,8 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
 
   // The incremental checks trusted unchanged tets; the result carries one full check (the
   // confirmation every run gets, valid search or not: out.checks.seconds, not out.seconds).
-  out.shell = assemble_shell(surface, out.input);  // with quality for the report and writers
-  {
-    ShellCheckOptions o;
-    out.checks = check_shell(surface, out.shell.mesh, o);
-  }
+  out.shell = assemble_shell(surface, out.input, out.assemble);  // with quality, for the report
+  out.checks = check_shell(surface, out.shell.mesh, first_few);
   out.on_surface = search.folded();
   out.cap_faces = search.caps();
   count_moved_back(search, s, out);

@@ -64,10 +64,15 @@ struct ValidityOptions {
   /// Passes giving depth back once the shell is valid: every vertex below its traced depth one
   /// step deeper, the rounds again from there (0: none).
   int give_back = 2;
+  /// Layers through the thickness (--layers, --layer-ratio; AssembleOptions): the search checks
+  /// the layered shell, so the shell it ends with is valid layer by layer.
+  int layers = 1;
+  double layer_ratio = 1.0;
 };
 
 struct ValidShell {
   ShellInput input;             ///< final inner vertices (compact, order-preserving)
+  AssembleOptions assemble;     ///< how `shell` was assembled (its layers)
   AssembleResult shell;         ///< the assembled shell
   ShellCheckResult checks;      ///< checks of the final shell (valid() unless floor fails)
   int rounds = 0;               ///< rounds of the moving-back search
@@ -100,9 +105,10 @@ struct ValidShell {
 /// bowl, propeller; independent of the resolution).
 inline constexpr std::size_t kValidityBytesPerFace = 6656;
 
-/// Estimated peak bytes of make_valid_shell() on `surface` (kValidityBytesPerFace per triangle).
-inline std::size_t estimate_validity_bytes(const SurfaceMesh& surface) {
-  return surface.triangles.size() * kValidityBytesPerFace;
+/// Estimated peak bytes of make_valid_shell() on `surface` with `layers` layers
+/// (kValidityBytesPerFace per triangle and layer: nearly all of it is per tet).
+inline std::size_t estimate_validity_bytes(const SurfaceMesh& surface, int layers = 1) {
+  return surface.triangles.size() * kValidityBytesPerFace * static_cast<std::size_t>(layers);
 }
 
 /// Finds the thickest valid inner vertices along the traces, starting from `start`. Reports to

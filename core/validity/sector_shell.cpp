@@ -92,6 +92,7 @@ void insert_gaps(const std::vector<std::pair<std::uint32_t, Tet>>& gaps, TetMesh
                    [](const auto& a, const auto& b) { return a.first < b.first; });
   std::vector<Tet> tets;
   std::vector<std::uint32_t> source;
+  std::vector<std::uint8_t> layer;
   is_gap.clear();
   std::size_t next = 0;
   for (std::size_t t = 0; t <= mesh.tets.size(); ++t) {
@@ -101,15 +102,18 @@ void insert_gaps(const std::vector<std::pair<std::uint32_t, Tet>>& gaps, TetMesh
       for (; next < sorted.size() && sorted[next].first == mesh.source_triangle[t - 1]; ++next) {
         tets.push_back(sorted[next].second);
         source.push_back(sorted[next].first);
+        layer.push_back(1);
         is_gap.push_back(1);
       }
     if (t == mesh.tets.size()) break;
     tets.push_back(mesh.tets[t]);
     source.push_back(mesh.source_triangle[t]);
+    layer.push_back(mesh.layer.empty() ? 1 : mesh.layer[t]);
     is_gap.push_back(0);
   }
   mesh.tets = std::move(tets);
   mesh.source_triangle = std::move(source);
+  mesh.layer = std::move(layer);
 }
 
 /// Removes the tets flagged in `remove` (and their flags in `is_gap`).
@@ -119,11 +123,13 @@ void remove_tets(const std::vector<char>& remove, TetMesh& mesh, std::vector<cha
     if (remove[t]) continue;
     mesh.tets[k] = mesh.tets[t];
     mesh.source_triangle[k] = mesh.source_triangle[t];
+    if (!mesh.layer.empty()) mesh.layer[k] = mesh.layer[t];
     is_gap[k] = is_gap[t];
     ++k;
   }
   mesh.tets.resize(k);
   mesh.source_triangle.resize(k);
+  if (!mesh.layer.empty()) mesh.layer.resize(k);
   is_gap.resize(k);
 }
 
@@ -134,7 +140,10 @@ SectorShell join_sectors(const SurfaceMesh& surface, const SectorSplit& split, V
   const std::size_t n = surface.points.size();
   TetMesh& mesh = valid.shell.mesh;
   SectorShell out;
-  const auto gaps = gap_tets(split, valid.input, n, mesh, min_quality);
+  // Layered side quads have layer points the gap tets would not share: gaps stay open then.
+  const int layers = valid.assemble.layers;
+  const auto gaps = layers > 1 ? std::vector<std::pair<std::uint32_t, Tet>>()
+                               : gap_tets(split, valid.input, n, mesh, min_quality);
   join_points(split, n, mesh);
   std::vector<char> is_gap;
   insert_gaps(gaps, mesh, is_gap);
@@ -142,6 +151,7 @@ SectorShell join_sectors(const SurfaceMesh& surface, const SectorSplit& split, V
   ShellCheckOptions options;
   options.max_listed = std::numeric_limits<std::size_t>::max();
   options.extra_tets = 2 * split.sectors;
+  options.layers = layers;
   ShellCheckResult c;
   for (;;) {
     c = check_shell(surface, mesh, options);

@@ -15,7 +15,9 @@
 // volume; the whole shell is then checked on the input
 // surface and every gap tet that offends (flat, inverted, overlapping, leaking) is removed until
 // it passes: the shell without gap tets is the split surface's valid shell, so this ends valid.
-// At most 2 tets per sector boundary: T <= 3F + 2 * sectors.
+// At most 2 tets per sector boundary: T <= 3F + 2 * sectors. A layered shell (--layers K > 1)
+// cuts the side quads at layer points the gap tets would not share, so its gaps stay open:
+// T <= 3 K F.
 #pragma once
 
 #include <cstddef>
