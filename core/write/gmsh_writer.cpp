@@ -65,6 +65,8 @@ void msh_all_data(TextOut& out, const TetMesh& mesh, const TaggedBoundary& bound
     msh_data(out, "ElementData", "source_triangle", per_element(mesh.source_triangle, boundary),
              as_int);
   }
+  if (layered(mesh))
+    msh_data(out, "ElementData", "layer", per_element(mesh.layer, boundary), as_int);
 }
 
 void msh_physical_names(TextOut& out) {

@@ -56,6 +56,7 @@ void check_tet_mesh(const TetMesh& mesh) {
   };
   check_size(mesh.quality.size(), nt, "quality");
   check_size(mesh.source_triangle.size(), nt, "source_triangle");
+  check_size(mesh.layer.size(), nt, "layer");
   check_size(mesh.inner.size(), np, "inner");
   check_size(mesh.thickness.size(), np, "thickness");
   check_size(mesh.surface_vertex.size(), np, "surface_vertex");
@@ -118,6 +119,7 @@ void write_vtu(std::ostream& os, const TetMesh& mesh, const TaggedBoundary& boun
   if (!mesh.source_triangle.empty()) {
     vtu_data_array(out, "Int64", "source_triangle", mesh.source_triangle, as_int);
   }
+  if (layered(mesh)) vtu_data_array(out, "UInt8", "layer", mesh.layer, as_int);
   vtu_data_array(out, "UInt8", "outer_faces", face_mask(mesh, boundary, kOuterTag), as_int);
   vtu_data_array(out, "UInt8", "inner_faces", face_mask(mesh, boundary, kInnerTag), as_int);
   out.str("      </CellData>\n");
@@ -210,12 +212,13 @@ void write_vtk(std::ostream& os, const TetMesh& mesh, const TaggedBoundary& boun
   for (long long i = 0; i < nt; ++i) out.integer(kVtkTetra).ch('\n');
   out.str("CELL_DATA ").integer(nt).ch('\n');
   out.str("FIELD cell_data ")
-      .integer(2 + !mesh.quality.empty() + !mesh.source_triangle.empty())
+      .integer(2 + !mesh.quality.empty() + !mesh.source_triangle.empty() + layered(mesh))
       .ch('\n');
   if (!mesh.quality.empty()) vtk_field_array(out, "quality", "double", mesh.quality, as_real);
   if (!mesh.source_triangle.empty()) {
     vtk_field_array(out, "source_triangle", "long", mesh.source_triangle, as_int);
   }
+  if (layered(mesh)) vtk_field_array(out, "layer", "unsigned_char", mesh.layer, as_int);
   vtk_field_array(out, "outer_faces", "unsigned_char", face_mask(mesh, boundary, kOuterTag),
                   as_int);
   vtk_field_array(out, "inner_faces", "unsigned_char", face_mask(mesh, boundary, kInnerTag),
@@ -272,11 +275,12 @@ void write_tetgen_node(std::ostream& os, const TetMesh& mesh) {
 
 void write_tetgen_ele(std::ostream& os, const TetMesh& mesh) {
   TextOut out(os);
-  out.integer(static_cast<long long>(mesh.tets.size())).str(" 4 0\n");
-  long long index = 1;
-  for (const Tet& t : mesh.tets) {
-    out.integer(index++);
-    for (std::uint32_t v : t) out.ch(' ').integer(static_cast<long long>(v) + 1);
+  const bool layers = layered(mesh);  // as the region attribute
+  out.integer(static_cast<long long>(mesh.tets.size())).str(layers ? " 4 1\n" : " 4 0\n");
+  for (std::size_t i = 0; i < mesh.tets.size(); ++i) {
+    out.integer(static_cast<long long>(i) + 1);
+    for (std::uint32_t v : mesh.tets[i]) out.ch(' ').integer(static_cast<long long>(v) + 1);
+    if (layers) out.ch(' ').integer(mesh.layer[i]);
     out.ch('\n');
   }
   out.flush();

@@ -70,6 +70,7 @@ TetMesh cube_5_tets(bool with_data) {
   if (with_data) {
     mesh.quality = {0.1, 1.0 / 3.0, 2.0 / 3.0, 0.7071067811865476, 1.0};
     mesh.source_triangle = {0, 7, 4294967295u, 3, 11};
+    mesh.layer = {1, 2, 3, 2, 1};
     mesh.inner = {0, 1, 0, 1, 1, 0, 1, 0};
     mesh.thickness = {0.0, 0.1, 1.0 / 3.0, 2.5e-7, 1e10 / 3.0, 0.0, 5.0, std::sqrt(3.0)};
   }
@@ -352,6 +353,8 @@ TEST(WritersTest, MeshioReadsEveryFormatBack) {
         if (!mesh.source_triangle.empty() && c.has_cell_data) {
           expect_data(back.cell_data, "source_triangle", mesh.source_triangle);
         }
+        if (!mesh.layer.empty() && c.has_cell_data)
+          expect_data(back.cell_data, "layer", mesh.layer);
         if (!mesh.inner.empty()) expect_data(back.point_data, "inner", mesh.inner);
         if (!mesh.thickness.empty()) expect_data(back.point_data, "thickness", mesh.thickness);
         if (mesh.quality.empty()) {
@@ -498,11 +501,15 @@ TEST(WritersTest, TetGenTripleReadsBackWithOutwardFaces) {
 
   ASSERT_TRUE(read_tetgen_table(dir.file("cube.ele"), header, rows));
   EXPECT_EQ(header[1], 4);
+  ASSERT_EQ(header.size(), 3u);
+  EXPECT_EQ(header[2], 1);  // one attribute: the layer
   ASSERT_EQ(rows.size(), cube.tets.size());
   for (std::size_t t = 0; t < rows.size(); ++t) {
     Tet tet{};
     for (int k = 0; k < 4; ++k) tet[k] = static_cast<std::uint32_t>(std::stoll(rows[t][k + 1]) - 1);
     EXPECT_EQ(tet, cube.tets[t]);
+    ASSERT_EQ(rows[t].size(), 6u);
+    EXPECT_EQ(std::stoi(rows[t][5]), cube.layer[t]);
     // TetGen's convention: orient3d(a, b, c, d) < 0, i.e. d above the CCW triangle (a, b, c).
     EXPECT_GT(tet_volume(points[tet[0]], points[tet[1]], points[tet[2]], points[tet[3]]), 0.0);
   }
@@ -525,6 +532,20 @@ TEST(WritersTest, TetGenTripleReadsBackWithOutwardFaces) {
   }
   const double side = 0.1 * std::sqrt(2.0);
   EXPECT_NEAR(area, 6.0 * side * side, 1e-14);
+}
+
+TEST(WritersTest, OneLayerWritesNoLayerData) {
+  TetMesh cube = cube_5_tets(true);
+  cube.layer.assign(cube.tets.size(), 1);
+  TempDir dir;
+  for (const FormatCase& c : all_formats()) {
+    SCOPED_TRACE(format_name(c.format));
+    const std::string path = dir.file(c.file);
+    write_tet_mesh(path, cube, c.format);
+    const std::string text = slurp(path);
+    EXPECT_EQ(text.find("layer"), std::string::npos);
+    if (c.format == TetFormat::TetGen) EXPECT_EQ(text.rfind("5 4 0\n", 0), 0u);
+  }
 }
 
 TEST(WritersTest, TetGenStemWithoutExtension) {
