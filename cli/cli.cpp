@@ -597,6 +597,16 @@ void register_options(CLI::App& app, CliOptions& opt) {
                  "can move (0: only from inverted ones)")
       ->check(CLI::Range(0.0, 0.5))
       ->group(th);
+  app.add_option("--layers", opt.shell.validity.layers,
+                 "K: stack K prisms along each prism's straight side edges, 3K tets (the tets "
+                 "are K times less elongated)")
+      ->check(CLI::Range(1, kMaxLayers))
+      ->group(th);
+  app.add_option("--layer-ratio", opt.shell.validity.layer_ratio,
+                 "Each layer this many times as thick as the one outside it (geometric growth "
+                 "from the surface)")
+      ->check(CLI::Range(0.1, 10.0))
+      ->group(th);
   CLI::Option* optimize =
       app.add_flag("--optimize", opt.shell.optimize.enabled,
                    "After the validity search, move inner vertices (never outward, within the "

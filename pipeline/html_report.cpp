@@ -294,7 +294,8 @@ std::string report_html(const ShellResult& r, const ReportFiles& files, double r
   for (int a = 0; a < 3; ++a)  // no -5.55e-17 in captions
     if (std::fabs(centre[a]) < 1e-12 * box.diagonal()) centre[a] = 0;
   const bool shell = !r.options.traces_only && !r.mesh.tets.empty();
-  const std::size_t bound = 3 * st.faces + 2 * r.validity.sectors;
+  const std::size_t layers = std::size_t(r.options.validity.layers);
+  const std::size_t bound = 3 * layers * st.faces + 2 * r.validity.sectors;
   std::ostringstream h;
   h << page_head("vdb_shell: " + in.source);
   h << "<h1>Volumetric shell of " << escape(in.source) << "</h1>\n";
@@ -464,7 +465,8 @@ std::string report_html(const ShellResult& r, const ReportFiles& files, double r
     const ShellCheckResult& c = r.checks;
     const ValidityReport& v = r.validity;
     h << "<h2>Shell</h2><div class=\"grid\"><table>\n";
-    h << row("tets", count_of(r.mesh.tets.size()) + " of at most " + count_of(bound) + " (3F" +
+    h << row("tets", count_of(r.mesh.tets.size()) + " of at most " + count_of(bound) + " (" +
+                         (layers > 1 ? "3F x " + std::to_string(layers) + " layers" : "3F") +
                          (v.sectors ? " + 2 per sector" : std::string()) + "), " +
                          num(100.0 * r.mesh.tets.size() / std::max<std::size_t>(bound, 1), 3) +
                          "%");

@@ -270,12 +270,14 @@ ShellResult run(const LoadedSurface& surface, const ShellOptions& options,
     const auto t0 = Clock::now();
     StageMonitor monitor(control, "validity");
     ActiveStage active(monitor);
-    const std::size_t search = estimate_validity_bytes(work);
+    const int layers = options.validity.layers;
+    const std::size_t search = estimate_validity_bytes(work, layers);
     memory.validity = held + memory_bytes(inner) + search;
     check_memory_budget(
         "validity", memory.validity, budget,
         "the validity search and the shell (" + count(work.triangles.size(), "prisms") +
-            ", up to " + count(3 * work.triangles.size(), "tets") + ")" + with_traces,
+            ", up to " + count(3 * std::size_t(layers) * work.triangles.size(), "tets") + ")" +
+            with_traces,
         search >= traces_held
             ? "give a surface with fewer faces, or raise --max-memory"
             : "lower --resolution or raise --step (shorter traces), or give a surface with fewer "
@@ -345,6 +347,11 @@ void check_options(const ShellOptions& o) {
           t.edge_factor, "must be >= 0 (0: no limit)");
   require(o.validity.min_quality >= 0 && o.validity.min_quality <= 0.5, "--min-quality",
           o.validity.min_quality, "must be in [0, 0.5]");
+  require(o.validity.layers >= 1 && o.validity.layers <= kMaxLayers, "--layers", o.validity.layers,
+          "must be in [1, " + std::to_string(kMaxLayers) + "]");
+  require(std::isfinite(o.validity.layer_ratio) && o.validity.layer_ratio >= 0.1 &&
+              o.validity.layer_ratio <= 10,
+          "--layer-ratio", o.validity.layer_ratio, "must be in [0.1, 10]");
   require(o.adaptivity >= 0 && o.adaptivity <= 1, "--adaptivity", o.adaptivity,
           "must be in [0, 1]");
   require(o.threads >= 0, "--threads", o.threads, "must be >= 0 (0: all cores)");
@@ -494,6 +501,8 @@ std::string report_json(const ShellResult& r, const ReportFiles& files, double r
     const ShellCheckResult& checks = r.checks;
     const ShellCounts& c = r.counts;
     j["shell"] = {{"file", files.shell},
+                  {"layers", r.options.validity.layers},
+                  {"layer_ratio", r.options.validity.layer_ratio},
                   {"tets", r.mesh.tets.size()},
                   {"points", r.mesh.points.size()},
                   {"coverage", r.quality.coverage},

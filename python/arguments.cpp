@@ -202,6 +202,15 @@ const std::vector<OptionSpec>& option_specs() {
          o.validity.min_quality = to_float(v, n);
        },
        [](const ShellOptions& o) { return number_text(o.validity.min_quality); }},
+      {"layers", "--layers", "stack this many prisms along each prism's side edges (3K tets)",
+       [](ShellOptions& o, py::handle v, const char* n) { o.validity.layers = to_int(v, n); },
+       [](const ShellOptions& o) { return std::to_string(o.validity.layers); }},
+      {"layer_ratio", "--layer-ratio",
+       "each layer this many times as thick as the one outside it, in [0.1, 10]",
+       [](ShellOptions& o, py::handle v, const char* n) {
+         o.validity.layer_ratio = to_float(v, n);
+       },
+       [](const ShellOptions& o) { return number_text(o.validity.layer_ratio); }},
       {"threads", "--threads", "worker threads of this call (0: all cores)",
        [](ShellOptions& o, py::handle v, const char* n) { o.threads = to_int(v, n); },
        [](const ShellOptions& o) { return std::to_string(o.threads); }},

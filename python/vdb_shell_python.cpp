@@ -243,7 +243,8 @@ py::array_t<std::int64_t> int64_rows(const std::vector<std::array<std::uint32_t,
   return a;
 }
 
-py::array_t<std::int64_t> int64_values(const std::vector<std::uint32_t>& values) {
+template <class T>
+py::array_t<std::int64_t> int64_values(const std::vector<T>& values) {
   py::array_t<std::int64_t> a(static_cast<py::ssize_t>(values.size()));
   std::copy(values.begin(), values.end(), a.mutable_data());
   return a;
@@ -252,7 +253,7 @@ py::array_t<std::int64_t> int64_values(const std::vector<std::uint32_t>& values)
 /// The Python view of a ShellResult: arrays made once, the C++ result kept for the writers.
 struct PyShellResult {
   std::shared_ptr<const ShellResult> result;
-  py::array points, tets, source_triangle, quality, inner, thickness, surface_vertex;
+  py::array points, tets, source_triangle, layer, quality, inner, thickness, surface_vertex;
   py::array inner_vertices, inner_faces;
   py::object report;
   py::list notices;
@@ -263,6 +264,7 @@ struct PyShellResult {
         view(result, reinterpret_cast<const double*>(mesh.points.data()), mesh.points.size(), 3);
     tets = int64_rows(mesh.tets);
     source_triangle = int64_values(mesh.source_triangle);
+    layer = int64_values(mesh.layer);
     surface_vertex = int64_values(mesh.surface_vertex);
     quality = view(result, mesh.quality.data(), mesh.quality.size(), 0);
     thickness = view(result, mesh.thickness.data(), mesh.thickness.size(), 0);
@@ -274,7 +276,7 @@ struct PyShellResult {
     inner_vertices =
         view(result, reinterpret_cast<const double*>(s.points.data()), s.points.size(), 3);
     inner_faces = int64_rows(s.triangles);
-    for (py::array* a : {&tets, &source_triangle, &surface_vertex, &inner, &inner_faces})
+    for (py::array* a : {&tets, &source_triangle, &layer, &surface_vertex, &inner, &inner_faces})
       make_read_only(*a);
     report = py::module_::import("json").attr("loads")(report_json(*result));
     for (const std::string& n : result->notices) notices.append(n);
@@ -411,15 +413,20 @@ PYBIND11_MODULE(vdb_shell, m) {
                             "The shell build_shell() made. Arrays are read-only (copy them to "
                             "change them); write() and write_inner() write the shell they show.")
       .def_readonly("points", &PyShellResult::points,
-                    "(p, 3) float64: the surface's vertices first, then the inner vertices")
+                    "(p, 3) float64: the surface's vertices first, then the inner vertices (and "
+                    "with layers > 1 the layer points between them)")
       .def_readonly("tets", &PyShellResult::tets,
-                    "(t, 4) int64 indices into points, positively oriented (t <= 3 * faces + 2 * "
-                    "sectors of folded vertices)")
+                    "(t, 4) int64 indices into points, positively oriented (t <= 3 * layers * "
+                    "faces + 2 * sectors of folded vertices)")
       .def_readonly("source_triangle", &PyShellResult::source_triangle,
                     "(t,) int64: per tet, the input triangle (row of faces) it was built on")
+      .def_readonly("layer", &PyShellResult::layer,
+                    "(t,) int64: per tet, its layer through the thickness, 1 at the outer "
+                    "surface to `layers` at the inner one")
       .def_readonly("quality", &PyShellResult::quality,
                     "(t,) float64: per tet, the volume-length ratio (regular tet: 1)")
-      .def_readonly("inner", &PyShellResult::inner, "(p,) bool: per point, True for inner vertices")
+      .def_readonly("inner", &PyShellResult::inner,
+                    "(p,) bool: per point, True for inner vertices and layer points")
       .def_readonly("thickness", &PyShellResult::thickness,
                     "(p,) float64: per inner point, its distance to the farthest surface "
                     "vertex whose inner vertex it is (input units); 0 on the surface")

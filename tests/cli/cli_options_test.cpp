@@ -147,6 +147,21 @@ const std::vector<ReportCase>& report_cases() {
          EXPECT_LT(j["validity"]["moved_back_vertices"], b["validity"]["moved_back_vertices"]);
          EXPECT_GT(j["shell"]["coverage"], b["shell"]["coverage"]);
        }},
+      {"--layers",
+       {"--layers", "3"},
+       [](const json& b, const json& j) {  // 3 prisms stacked on each: 3x the tets, more points
+         EXPECT_EQ(b["shell"]["layers"], 1);
+         EXPECT_EQ(j["shell"]["layers"], 3);
+         EXPECT_GT(j["shell"]["tets"].get<double>(), 2.5 * b["shell"]["tets"].get<double>());
+         EXPECT_GT(j["shell"]["points"].get<double>(), 1.5 * b["shell"]["points"].get<double>());
+       }},
+      {"--layer-ratio",
+       {"--layers", "2", "--layer-ratio", "1.5"},
+       [](const json& b, const json& j) {
+         EXPECT_EQ(b["shell"]["layer_ratio"], 1.0);
+         EXPECT_EQ(j["shell"]["layer_ratio"], 1.5);
+         EXPECT_GT(j["shell"]["tets"].get<double>(), 1.5 * b["shell"]["tets"].get<double>());
+       }},
       {"--voxel-size",
        {"--voxel-size", "0.05"},
        [](const json& b, const json& j) {
@@ -173,7 +188,10 @@ TEST_F(CliOptionEffects, ReportShowsEveryFieldTracingAndShellOption) {
     c.expect(base(), r.report);
     const TetMesh shell = test::read_tetgen_shell(ele);
     EXPECT_EQ(shell.tets.size(), r.report["shell"]["tets"].get<std::size_t>());
-    EXPECT_EQ(test::independent_shell_problems(surface, shell), "");
+    const std::size_t layers = r.report["shell"]["layers"].get<std::size_t>();
+    EXPECT_EQ(test::independent_shell_problems(surface, shell,
+                                               3 * (layers - 1) * surface.triangles.size()),
+              "");
   }
 }
 

@@ -550,6 +550,25 @@ def test_optimize_option(sphere):
     assert np.array_equal(optimized.tets, plain.tets)
 
 
+def test_layers_option(sphere, sphere_shell, tmp_path):
+    shell = vdb_shell.build_shell(*sphere, resolution=RESOLUTION, layers=3, layer_ratio=1.5)
+    assert shell.report["shell"]["layers"] == 3 and shell.report["shell"]["layer_ratio"] == 1.5
+    assert sphere_shell.report["shell"]["layers"] == 1
+    assert set(np.unique(shell.layer)) == {1, 2, 3} and len(shell.layer) == len(shell.tets)
+    assert np.all(sphere_shell.layer == 1)
+    faces = len(sphere[1])
+    assert 2.5 * len(sphere_shell.tets) < len(shell.tets) <= 9 * faces
+    # Every tet positive, computed here.
+    p = shell.points[shell.tets]
+    volume = np.einsum("ij,ij->i", np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), p[:, 3] - p[:, 0])
+    assert volume.min() > 0
+    meshio = pytest.importorskip("meshio")
+    path = tmp_path / "layered.vtu"
+    vdb_shell.write(path, shell)
+    back = meshio.read(str(path))
+    assert np.array_equal(np.concatenate(back.cell_data["layer"]), shell.layer)
+
+
 def test_write_html(sphere_shell, tmp_path):
     path = tmp_path / "report.html"
     vdb_shell.write_html(path, sphere_shell)
