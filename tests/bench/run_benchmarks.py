@@ -27,6 +27,10 @@ Sections (--sections, comma-separated; default all):
   peers    TetGen (tetgen -pQ and -pqQ) on the table1 and meshes surfaces: wall time, tets, min and
            median volume-length quality (vdb_shell's formula, core/assemble/quality.cpp),
            beside vdb_shell.
+  layers   --layers K / --layer-ratio r (LAYER_CASES: 1, 2, 5 layers, 5 at ratio 1.5) on fandisk,
+           spot, fertility and a 3,040-face sphere at --table1-resolution: tets, coverage,
+           quality (min, 5th percentile, median, smallest dihedral angle), validity and total
+           seconds (medians of --repeats runs), the independent checker once per case.
   targets  (always) the performance targets, met or missed by how much; nothing is asserted.
 
 --quick: 1 run per point, scaling at 64 and 128 on fandisk only, threads at 128 (about 1-2
@@ -65,7 +69,10 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.normpath(os.path.join(HERE, "..", ".."))
 SHARED = os.path.normpath(os.path.join(REPO, "..", "shared"))
 
-ALL_SECTIONS = ["table1", "meshes", "fine", "scaling", "threads", "peers"]
+ALL_SECTIONS = ["table1", "meshes", "fine", "scaling", "threads", "peers", "layers"]
+# --layers section: (layers, ratio) per mesh; meshes from --meshes, and one generated sphere.
+LAYER_CASES = [(1, 1.0), (2, 1.0), (5, 1.0), (5, 1.5)]
+LAYER_MESHES = [("fandisk", "fandisk.obj"), ("spot", "spot.obj"), ("fertility", "fertility.off")]
 
 # The fine meshes of the fine section: (label, how it is made, argument, detail or levels).
 # Subdivided meshes are the shared ones midpoint-subdivided (vdb_shell_bench_fields
@@ -585,8 +592,9 @@ class Suite:
     # -- one vdb_shell shell, repeated ---------------------------------------------------------
 
     def shell_case(self, label, surface, res, repeats, folder, threads=None, checker=True,
-                   verify_quality=True, keep_shell=True):
-        """Runs vdb_shell SURFACE -o X.vtu --resolution RES --report X.json `repeats` times."""
+                   verify_quality=True, keep_shell=True, extra=()):
+        """Runs vdb_shell SURFACE -o X.vtu --resolution RES --report X.json [EXTRA...]
+        `repeats` times."""
         d = os.path.join(self.work, folder)
         os.makedirs(d, exist_ok=True)
         shell = os.path.join(d, "%s_r%d.vtu" % (label, res))
@@ -598,6 +606,7 @@ class Suite:
                    "--report", report_path]
             if threads:
                 cmd += ["-j", threads]
+            cmd += list(extra)
             rec = self.runner.run(cmd)
             if rec["ok"]:
                 try:
@@ -953,6 +962,56 @@ class Suite:
                          rows)]
         self.emit("\n".join(text))
         self.rendered.add("fine")
+        self.save()
+
+    # -- layers --------------------------------------------------------------------------------
+
+    def section_layers(self):
+        res = self.args.table1_resolution
+        meshes = [(label, os.path.join(self.args.meshes, f)) for label, f in LAYER_MESHES
+                  if os.path.exists(os.path.join(self.args.meshes, f))]
+        if "shapes" in self.bin:
+            label, path, err = self.make_shape("sphere", 2)
+            if path:
+                meshes.append((label, path))
+        cases = []
+        self.results["sections"]["layers"] = {"resolution": res, "cases": cases}
+        for label, path in meshes:
+            for layers, ratio in LAYER_CASES:
+                name = "%s_K%d_r%g" % (label, layers, ratio)
+                log("layers: %s @%d x%d" % (name, res, self.args.repeats))
+                case = self.shell_case(name, path, res, self.args.repeats, "layers",
+                                       verify_quality=False, keep_shell=False,
+                                       extra=["--layers", layers, "--layer-ratio", ratio])
+                case.update({"mesh": label, "layers": layers, "ratio": ratio})
+                cases.append(case)
+                self.save()
+        self.render_layers()
+
+    def render_layers(self):
+        sec = self.results["sections"].get("layers") or {}
+        rows = []
+        for c in sec.get("cases", []):
+            if not c.get("ok"):
+                rows.append([c.get("mesh", c["label"]), c.get("layers"), c.get("ratio")] +
+                            [""] * 9 + [failure_text(c)])
+                continue
+            r, t = c["report"], c["timings_median_s"]
+            rows.append([c["mesh"], c["layers"], fmt(c["ratio"], 2),
+                         fmt(get(r, "shell", "tets")), fmt(get(r, "shell", "coverage"), 3),
+                         fmt(get(r, "quality", "min"), 5), fmt(get(r, "quality", "p5"), 3),
+                         fmt(get(r, "quality", "median"), 3),
+                         fmt(get(r, "quality", "min_dihedral_deg"), 3),
+                         fmt(t.get("assemble"), 2), fmt(t.get("total"), 2),
+                         fmt(kib_to_mib(c.get("maxrss_kib")), 0), self.checker_cells(c)[0]])
+        text = ["## Layers at %s^3" % sec.get("resolution"), "",
+                "--layers K --layer-ratio r (validity: the report's assemble stage, the search "
+                "and its final check; seconds are medians over the runs; checker: "
+                "../shared/eval/check_shell.py).", "",
+                md_table(["mesh", "K", "r", "tets", "coverage", "min Q", "Q p5", "Q median",
+                          "min dihedral", "validity s", "total s", "peak MiB", "checker"], rows)]
+        self.emit("\n".join(text))
+        self.rendered.add("layers")
         self.save()
 
     # -- scaling meshes ------------------------------------------------------------------------
