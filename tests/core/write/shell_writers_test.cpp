@@ -544,7 +544,9 @@ TEST(WritersTest, OneLayerWritesNoLayerData) {
     write_tet_mesh(path, cube, c.format);
     const std::string text = slurp(path);
     EXPECT_EQ(text.find("layer"), std::string::npos);
-    if (c.format == TetFormat::TetGen) EXPECT_EQ(text.rfind("5 4 0\n", 0), 0u);
+    if (c.format == TetFormat::TetGen) {
+      EXPECT_EQ(text.rfind("5 4 0\n", 0), 0u);
+    }
   }
 }
 
