@@ -153,10 +153,12 @@ struct StageTimings {
 struct ShellResult {
   ShellOptions options;  ///< the options of the run
   InputReport input;
-  /// The shell: points (surface vertices first, then inner vertices), positive tets, and per
-  /// tet `source_triangle` and `quality` (volume-length ratio), per point `inner` (1 for inner
-  /// vertices) and `thickness` (world units: an inner vertex's distance to the farthest surface
-  /// vertex it belongs to, 0 on the surface). Empty with traces_only.
+  /// The shell: points (surface vertices first, then inner vertices, then with --layers the
+  /// layer points), positive tets, and per tet `source_triangle`, `layer` (1 at the outer
+  /// surface) and `quality` (volume-length ratio), per point `inner` (1 for inner vertices and
+  /// layer points), `thickness` (world units: an inner vertex's distance to the farthest surface
+  /// vertex it belongs to, a layer point's to its own, 0 on the surface) and `surface_vertex`.
+  /// Empty with traces_only.
   TetMesh mesh;
   /// The inner side as a surface (outward from the shell, i.e. facing the interior): one
   /// triangle per input triangle, a vertex kept on the surface being its own inner vertex.
