@@ -85,7 +85,8 @@ struct ShellChecker::Impl {
       throw InputError("ShellChecker: " + std::to_string(o.layers) + " layers of " +
                        std::to_string(s.triangles.size()) + " prisms; give 1 to " +
                        std::to_string(kMaxLayers) + " layers and fewer than " +
-                       std::to_string(UINT32_MAX / per_prism) + " triangles");
+                       std::to_string(UINT32_MAX / std::max<std::uint32_t>(per_prism, 3)) +
+                       " triangles");
   }
 
   // The new tets of the prisms that moved: prism i is faces[i], its tets' geometry

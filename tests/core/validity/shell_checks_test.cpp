@@ -499,6 +499,22 @@ TEST(ShellChecker, RejectsAMeshThatIsNotAnAssembledShell) {
   ShellChecker checker(s);
   m.source_triangle.clear();
   EXPECT_THROW(checker.check(m), InputError);
+  for (const int layers : {0, -3, 65}) {
+    ShellCheckOptions o;
+    o.layers = layers;
+    EXPECT_THROW(ShellChecker(s, o), InputError) << layers;
+  }
+  // A two-layer shell (6 tets per prism) for a one-layer checker.
+  TetMesh doubled = scaled_shell(s, 0.5);
+  TetMesh two;
+  two.points = doubled.points;
+  for (std::size_t t = 0; t < doubled.tets.size(); ++t)
+    for (int copy = 0; copy < 2; ++copy) {
+      two.tets.push_back(doubled.tets[t]);
+      two.source_triangle.push_back(doubled.source_triangle[t]);
+    }
+  ShellChecker one_layer(s);
+  EXPECT_THROW(one_layer.check(two), InputError);
 }
 
 }  // namespace
