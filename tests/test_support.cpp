@@ -267,6 +267,15 @@ std::string independent_shell_problems(const SurfaceMesh& surface, const TetMesh
   return "";
 }
 
+double independent_quality(const TetMesh& mesh, const Tet& t) {
+  const Vec3d p[4] = {mesh.points[t[0]], mesh.points[t[1]], mesh.points[t[2]], mesh.points[t[3]]};
+  const double volume = dot(p[1] - p[0], cross(p[2] - p[0], p[3] - p[0])) / 6.0;
+  double sum2 = 0;
+  for (int i = 0; i < 4; ++i)
+    for (int j = i + 1; j < 4; ++j) sum2 += norm2(p[i] - p[j]);
+  return 6 * std::sqrt(2.0) * volume / std::pow(sum2 / 6, 1.5);
+}
+
 double independent_coverage(const SurfaceMesh& surface, const TetMesh& shell) {
   const double enclosed = enclosed_volume6(surface);
   if (enclosed == 0) return 0;

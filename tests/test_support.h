@@ -75,6 +75,9 @@ std::string independent_shell_problems(const SurfaceMesh& surface, const TetMesh
 /// the volume the surface's triangles enclose (divergence theorem). 0 for an empty surface.
 double independent_coverage(const SurfaceMesh& surface, const TetMesh& shell);
 
+/// Volume-length ratio 6 sqrt(2) V / l_rms^3 of tet t of `mesh` (regular tet = 1), computed here.
+double independent_quality(const TetMesh& mesh, const Tet& t);
+
 /// The points and tets of a TetGen .node/.ele pair (`ele_path` names the .ele; the .node is
 /// beside it), read by a parser of its own; 0- or 1-based, as the .node's first index says.
 /// \throw std::runtime_error when either file is missing or malformed.

@@ -112,8 +112,8 @@ AssembleResult assemble_shell(const SurfaceMesh& surface, const ShellInput& inpu
                      " surface vertices; give one inner id per surface vertex");
   std::size_t off_surface = 0;
   for (const std::uint32_t i : input.inner_id) off_surface += i != kOnSurface;
-  const std::size_t n_before_layers = n_surface + n_inner + input.cap_points.size();
-  const std::size_t n_points = n_before_layers + off_surface * static_cast<std::size_t>(layers - 1);
+  const std::size_t n_points =
+      first_layer_point(surface, input) + off_surface * static_cast<std::size_t>(layers - 1);
   if (n_points > std::numeric_limits<std::uint32_t>::max())
     throw InputError("assemble_shell: " + std::to_string(n_points) +
                      " points do not fit 32-bit indices");

@@ -55,6 +55,12 @@ inline constexpr int kMaxLayers = 64;
 /// the one outside it.
 std::vector<double> layer_fractions(int layers, double ratio);
 
+/// Index of the first layer point assemble_shell() gives the shell of `surface` and `input`:
+/// the points before are the surface, inner and cap points.
+inline std::size_t first_layer_point(const SurfaceMesh& surface, const ShellInput& input) {
+  return surface.points.size() + input.inner_points.size() + input.cap_points.size();
+}
+
 /// The shell and what assembling it did.
 struct AssembleResult {
   /// points: the surface points (same indices), then inner_points (surface index count + i),

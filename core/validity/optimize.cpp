@@ -57,8 +57,7 @@ LayerPoints layer_points(const SurfaceMesh& surface, const ShellInput& input,
   const int K = assemble.layers;
   if (K > 1) {
     const std::vector<double> at = layer_fractions(K, assemble.layer_ratio);
-    auto next = static_cast<std::uint32_t>(surface.points.size() + input.inner_points.size() +
-                                           input.cap_points.size());
+    auto next = static_cast<std::uint32_t>(first_layer_point(surface, input));
     for (std::uint32_t v = 0; v < surface.points.size(); ++v)
       if (input.inner_id[v] != kOnSurface)
         for (int k = 1; k < K; ++k) {

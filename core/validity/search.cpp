@@ -314,36 +314,35 @@ class ShellSearch {
     };
     std::size_t unwelded = 0;
     LocalPrism p;
+    // Steps back the deepest movable corner of the first of `tets` that is not positive (when
+    // `volumes`) or below `quality`; whether it did.
+    const auto step_first = [&](const Tet* tets, std::size_t count, bool volumes, double quality) {
+      for (std::size_t i = 0; i < count; ++i) {
+        const std::array<Vec3d, 4> c = p.corners(tets[i]);
+        if (!(volumes && tet_volume_class(c, zero_volume_tolerance) != TetVolume::kPositive) &&
+            !(tet_quality(c[0], c[1], c[2], c[3]) < quality))
+          continue;
+        const std::uint32_t v = deepest_corner(s, p, tets[i]);
+        if (v == UINT32_MAX) continue;  // at the floor: left to the checks
+        unwelded += step_back(s, v, shrink, moved);
+        return true;  // the prism is queued again
+      }
+      return false;
+    };
     for (std::size_t head = 0; head < queue.size(); ++head) {
       if ((head & 1023) == 1023) monitor_.alive();
       const std::uint32_t f = queue[head];
       queued[f] = 0;
       prism(s, f, p);
       const bool whole = layers_ == 1 || p.cap;  // p.tets are the prism's own 3 tets
-      const double layer_quality = whole ? min_quality : min_quality / layers_;
-      bool stepped = false;
-      for (std::size_t i = 0; i < p.tets.size() && !stepped; ++i) {
-        const std::array<Vec3d, 4> c = p.corners(i);
-        if (tet_volume_class(c, zero_volume_tolerance) == TetVolume::kPositive &&
-            !(tet_quality(c[0], c[1], c[2], c[3]) < layer_quality))
-          continue;
-        const std::uint32_t v = deepest_corner(s, p, p.tets[i]);
-        if (v == UINT32_MAX) continue;  // at the floor: left to the checks
-        unwelded += step_back(s, v, shrink, moved);
-        stepped = true;  // the prism is queued again
-      }
-      if (stepped || whole || !(min_quality > 0)) continue;
+      if (step_first(p.tets.data(), p.tets.size(), true,
+                     whole ? min_quality : min_quality / layers_) ||
+          whole || !(min_quality > 0))
+        continue;
       const std::uint32_t* inner = p.ids.data() + 3 * layers_;
-      const PrismTets prism_tets =
+      const PrismTets own =
           split_prism({p.ids[0], p.ids[1], p.ids[2], inner[0], inner[1], inner[2]});
-      for (int i = 0; i < prism_tets.count; ++i) {
-        const std::array<Vec3d, 4> c = p.corners(prism_tets.tets[i]);
-        if (!(tet_quality(c[0], c[1], c[2], c[3]) < min_quality)) continue;
-        const std::uint32_t v = deepest_corner(s, p, prism_tets.tets[i]);
-        if (v == UINT32_MAX) continue;
-        unwelded += step_back(s, v, shrink, moved);
-        break;
-      }
+      step_first(own.tets.data(), static_cast<std::size_t>(own.count), false, min_quality);
     }
     return unwelded;
   }
@@ -502,7 +501,7 @@ class PointSlots {
         mesh_(mesh),
         n_(static_cast<std::uint32_t>(surface.points.size())),
         n_slots_(static_cast<std::uint32_t>(in.inner_points.size())),
-        first_layer_point_(n_ + n_slots_ + static_cast<std::uint32_t>(in.cap_points.size())) {}
+        first_layer_point_(static_cast<std::uint32_t>(first_layer_point(surface, in))) {}
   std::uint32_t operator()(std::uint32_t p) const {
     if (p < n_) return UINT32_MAX;
     if (p < n_ + n_slots_) return p - n_;

@@ -7,7 +7,6 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
-#include <cmath>
 #include <map>
 #include <set>
 #include <string>
@@ -36,17 +35,10 @@ std::string problems(const ShellResult& r, int layers) {
                                           3 * (layers - 1) * faces + 2 * r.validity.sectors);
 }
 
-/// Volume-length ratio of every tet, computed here.
+/// Volume-length ratio of every tet (test_support's), ascending.
 std::vector<double> qualities(const TetMesh& m) {
   std::vector<double> q;
-  for (const Tet& t : m.tets) {
-    const Vec3d p[4] = {m.points[t[0]], m.points[t[1]], m.points[t[2]], m.points[t[3]]};
-    const double volume = dot(p[1] - p[0], cross(p[2] - p[0], p[3] - p[0])) / 6.0;
-    double sum2 = 0;
-    for (int i = 0; i < 4; ++i)
-      for (int j = i + 1; j < 4; ++j) sum2 += norm2(p[i] - p[j]);
-    q.push_back(6 * std::sqrt(2.0) * volume / std::pow(sum2 / 6, 1.5));
-  }
+  for (const Tet& t : m.tets) q.push_back(test::independent_quality(m, t));
   std::sort(q.begin(), q.end());
   return q;
 }

@@ -23,11 +23,7 @@ Measures measures(const TetMesh& m) {
   Measures out;
   for (const Tet& t : m.tets) {
     const Vec3d p[4] = {m.points[t[0]], m.points[t[1]], m.points[t[2]], m.points[t[3]]};
-    const double volume = dot(p[1] - p[0], cross(p[2] - p[0], p[3] - p[0])) / 6.0;
-    double sum2 = 0;
-    for (int i = 0; i < 4; ++i)
-      for (int j = i + 1; j < 4; ++j) sum2 += norm2(p[i] - p[j]);
-    out.quality.push_back(6 * std::sqrt(2.0) * volume / std::pow(sum2 / 6, 1.5));
+    out.quality.push_back(test::independent_quality(m, t));
     double smallest = 180;
     for (int i = 0; i < 4; ++i)
       for (int j = i + 1; j < 4; ++j) {  // the edge (i, j) between the faces without k and l
