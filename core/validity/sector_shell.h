@@ -12,9 +12,10 @@
 //     f's from v, g's from b: (v, b, b', p_g), (v, b', p_f, p_g)   (and mirrored)
 // Gaps whose b is split at the same edge, or whose two sectors share an inner vertex, are left
 // open, and so are gap tets below the search's minimum quality. Each gap tet is oriented by its
-// volume; the whole shell is then checked on the input
-// surface and every gap tet that offends (flat, inverted, overlapping, leaking) is removed until
-// it passes: the shell without gap tets is the split surface's valid shell, so this ends valid.
+// volume; the shell is then checked on the input surface (check_added_tets(): every check in
+// full but overlaps and leaks, which only gap tets can add: joining the copies moves no point)
+// and every gap tet that offends (flat, inverted, overlapping, leaking) is removed until it
+// passes: the shell without gap tets is the split surface's valid shell, so this ends valid.
 // At most 2 tets per sector boundary: T <= 3F + 2 * sectors. A layered shell (--layers K > 1)
 // cuts the side quads at layer points the gap tets would not share, so its gaps stay open:
 // T <= 3 K F.

@@ -1,4 +1,4 @@
-// shell_checks.cpp — see shell_checks.h: check_shell(), check_volumes(),
+// shell_checks.cpp — see shell_checks.h: check_shell(), check_added_tets(), check_volumes(),
 // surface_self_intersections() and describe_problems(). The parts live in their own files:
 //   * check_steps.h: the checks of single elements (volumes, surface points, boundary faces,
 //     inner points) and the recording of the intersections, shared with ShellChecker
@@ -12,7 +12,9 @@
 #include <cmath>
 #include <numeric>
 #include <sstream>
+#include <string>
 
+#include "core/base/errors.h"
 #include "core/base/parallel.h"
 #include "core/base/timer.h"
 #include "core/validity/check_steps.h"
@@ -35,29 +37,62 @@ void check_inner_points(const TetMesh& mesh, const std::vector<std::uint32_t>& i
   record_outside_points(inner_points, outside, options, result);
 }
 
-// Tet-tet overlaps and leaks of every tet: all tets in one BroadPhase over their bounding box,
-// keyed by their index, each a query of the narrow phase.
+// Tet-tet overlaps and leaks of the tets `queries` (mesh indices): the tets `tets` (mesh
+// indices, ascending, the queries among them) in one BroadPhase over their bounding box, keyed by
+// their position in `tets`; the queries go to the narrow phase, against each other and the rest.
 void check_intersections(const SurfaceMesh& surface, const TetMesh& mesh,
-                         const InsideTester& inside, const ShellCheckOptions& options,
-                         ShellCheckResult& result) {
-  const std::size_t n = mesh.tets.size();
+                         const std::vector<std::uint32_t>& tets,
+                         const std::vector<std::uint32_t>& queries, const InsideTester& inside,
+                         const ShellCheckOptions& options, ShellCheckResult& result) {
+  const std::size_t n = tets.size();
   if (n == 0) return;
   std::vector<TetGeometry> geo(n);
   for_each_chunk(
       n,
       [&](std::size_t begin, std::size_t end) {
-        for (std::size_t t = begin; t != end; ++t) geo[t] = tet_geometry(tet_corners(mesh, t));
+        for (std::size_t k = begin; k != end; ++k)
+          geo[k] = tet_geometry(tet_corners(mesh, tets[k]));
       },
       1024);
   const BBox box = bounding_box_of(geo);
   const double cell_size = grid_cell_size(geo, box);
   BroadPhase phase(surface, box, cell_size, std::move(geo), options.check_leaks);
-  std::vector<std::uint32_t> queries(n);
-  std::iota(queries.begin(), queries.end(), 0u);
-  phase.insert(queries);
-  const std::vector<TetFindings> found = find_intersections(phase, queries, inside, options);
+  std::vector<std::uint32_t> keys(n), query_keys(queries.size());
+  std::iota(keys.begin(), keys.end(), 0u);
+  phase.insert(keys);
+  for (std::size_t i = 0; i < queries.size(); ++i)
+    query_keys[i] = static_cast<std::uint32_t>(
+        std::lower_bound(tets.begin(), tets.end(), queries[i]) - tets.begin());
+  const std::vector<TetFindings> found = find_intersections(phase, query_keys, inside, options);
   record_intersections(
-      found, queries, [](std::uint32_t key) { return key; }, options, result);
+      found, query_keys, [&](std::uint32_t key) { return tets[key]; }, options, result);
+}
+
+// The tets flagged in `added` and every tet whose box meets one of theirs, ascending.
+std::vector<std::uint32_t> tets_near_added(const TetMesh& mesh, const std::vector<char>& added) {
+  std::vector<BBox> boxes;
+  for (std::size_t t = 0; t < mesh.tets.size(); ++t)
+    if (added[t]) boxes.push_back(tet_geometry(tet_corners(mesh, t)).box);
+  std::vector<std::uint8_t> near(mesh.tets.size(), 0);
+  for_each_chunk(
+      mesh.tets.size(),
+      [&](std::size_t begin, std::size_t end) {
+        for (std::size_t t = begin; t != end; ++t) {
+          if (added[t]) {
+            near[t] = 1;
+            continue;
+          }
+          BBox box;
+          for (const std::uint32_t v : mesh.tets[t]) box.expand(mesh.points[v]);
+          near[t] = std::any_of(boxes.begin(), boxes.end(),
+                                [&](const BBox& b) { return boxes_overlap(box, b); });
+        }
+      },
+      4096);
+  std::vector<std::uint32_t> out;
+  for (std::size_t t = 0; t < near.size(); ++t)
+    if (near[t]) out.push_back(static_cast<std::uint32_t>(t));
+  return out;
 }
 
 // The cell size of surface_self_intersections()'s grid over `box`: the triangles' mean edge
@@ -126,7 +161,32 @@ ShellCheckResult check_shell(const SurfaceMesh& surface, const TetMesh& mesh,
   const InsideTester inside(surface, on_surface_distance(surface, options));
   check_inner_points(mesh, inner_points, inside, options, result);
   if (options.check_overlaps || options.check_leaks) {
-    check_intersections(surface, mesh, inside, options, result);
+    std::vector<std::uint32_t> all(mesh.tets.size());
+    std::iota(all.begin(), all.end(), 0u);
+    check_intersections(surface, mesh, all, all, inside, options, result);
+  }
+  result.seconds = seconds_since(start);
+  return result;
+}
+
+ShellCheckResult check_added_tets(const SurfaceMesh& surface, const TetMesh& mesh,
+                                  const std::vector<char>& added,
+                                  const ShellCheckOptions& options) {
+  const auto start = Clock::now();
+  ShellCheckResult result;
+  if (added.size() != mesh.tets.size())
+    throw InputError("check_added_tets: " + std::to_string(added.size()) + " flags for " +
+                     std::to_string(mesh.tets.size()) + " tets; give one per tet");
+  const std::vector<std::uint32_t> inner_points = check_elements(surface, mesh, options, result);
+  check_boundary_faces(surface, mesh, options, result);
+  const InsideTester inside(surface, on_surface_distance(surface, options));
+  check_inner_points(mesh, inner_points, inside, options, result);
+  if (options.check_overlaps || options.check_leaks) {
+    std::vector<std::uint32_t> queries;
+    for (std::size_t t = 0; t < added.size(); ++t)
+      if (added[t]) queries.push_back(static_cast<std::uint32_t>(t));
+    check_intersections(surface, mesh, tets_near_added(mesh, added), queries, inside, options,
+                        result);
   }
   result.seconds = seconds_since(start);
   return result;

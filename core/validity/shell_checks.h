@@ -116,6 +116,18 @@ struct ShellCheckResult {
 ShellCheckResult check_shell(const SurfaceMesh& surface, const TetMesh& mesh,
                              const ShellCheckOptions& options = {});
 
+/// check_shell() of `mesh` in which only the tets flagged in `added` (one flag per tet) can
+/// overlap or leak: every other tet passed an earlier check at the same corner positions against
+/// a surface of the same geometry (the tets added to a checked shell: sector gaps,
+/// sector_shell.h). Volumes, surface points, boundary faces and inner points are checked in full;
+/// overlaps and leaks only for the added tets, against each other and the tets whose boxes meet
+/// theirs (overlap_candidate_pairs counts those pairs only). Costs O(T) plus O(T) per added tet
+/// for the boxes, instead of a whole grid of the tets.
+/// \throw InputError as check_shell(), or unless `added` has one entry per tet.
+ShellCheckResult check_added_tets(const SurfaceMesh& surface, const TetMesh& mesh,
+                                  const std::vector<char>& added,
+                                  const ShellCheckOptions& options = {});
+
 /// Only the volume checks of check_shell() (inverted and zero-volume tets; the other counts
 /// stay 0): the cheap first test of a candidate shell. \pre every tet index is in range.
 ShellCheckResult check_volumes(const TetMesh& mesh, const ShellCheckOptions& options = {});

@@ -418,6 +418,75 @@ TEST(ShellChecks, TetOrderChangesNothingAndEveryOverlapIsFound) {
   EXPECT_EQ(a.first_overlapping_pairs, every);
 }
 
+TEST(ShellChecks, AddedTetsAreCheckedAsCheckShellChecksThem) {
+  // A valid half-thick sphere shell (hollow inside radius ~0.25) and tets added to it: one in
+  // the hollow (apart from everything), two more there crossing each other, one poking into the
+  // shell, one reaching out through the surface. check_added_tets() must find what check_shell()
+  // finds on the same mesh: the same pairs and leaks, every other count alike.
+  const SurfaceMesh s = make_shape("sphere", 2);
+  TetMesh m = scaled_shell(s, 0.5);
+  const std::size_t shell_tets = m.tets.size();
+  ShellCheckOptions options;
+  options.max_listed = std::numeric_limits<std::size_t>::max();
+  options.extra_tets = 5;
+  const auto add = [&](const std::array<Vec3d, 4>& corners) {
+    const auto first = static_cast<std::uint32_t>(m.points.size());
+    for (const Vec3d& p : corners) {
+      m.points.push_back(p);
+      m.inner.push_back(1);
+    }
+    Tet t{first, first + 1, first + 2, first + 3};
+    if (tet_volume(corners[0], corners[1], corners[2], corners[3]) < 0) std::swap(t[2], t[3]);
+    m.tets.push_back(t);
+    m.source_triangle.push_back(0);
+  };
+  const double r = 0.05;
+  add({Vec3d{0, 0, 0}, Vec3d{r, 0, 0}, Vec3d{0, r, 0}, Vec3d{0, 0, r}});  // alone in the hollow
+  add({Vec3d{-0.1, -0.1, -0.1}, Vec3d{-0.1 + r, -0.1, -0.1}, Vec3d{-0.1, -0.1 + r, -0.1},
+       Vec3d{-0.1, -0.1, -0.1 + r}});
+  add({Vec3d{-0.09, -0.09, -0.09}, Vec3d{-0.09 + r, -0.09, -0.09}, Vec3d{-0.09, -0.09 + r, -0.09},
+       Vec3d{-0.09, -0.09, -0.09 + r}});  // crosses the last
+  add({Vec3d{0.2, 0, 0}, Vec3d{0.35, 0, 0}, Vec3d{0.2, 0.05, 0}, Vec3d{0.2, 0, 0.05}});    // shell
+  add({Vec3d{0.45, 0, 0}, Vec3d{0.6, 0, 0}, Vec3d{0.45, 0.05, 0}, Vec3d{0.45, 0, 0.05}});  // out
+  std::vector<char> added(m.tets.size(), 0);
+  std::fill(added.begin() + static_cast<std::ptrdiff_t>(shell_tets), added.end(), 1);
+
+  const ShellCheckResult full = check_shell(s, m, options);
+  const ShellCheckResult part = check_added_tets(s, m, added, options);
+  const auto t0 = static_cast<std::uint32_t>(shell_tets);
+  ASSERT_EQ(full.first_overlapping_pairs.size(), full.overlapping_pairs);
+  EXPECT_NE(std::find(full.first_overlapping_pairs.begin(), full.first_overlapping_pairs.end(),
+                      std::array<std::uint32_t, 2>{t0 + 1, t0 + 2}),
+            full.first_overlapping_pairs.end());
+  EXPECT_GT(full.overlapping_pairs, 1u);  // the pair in the hollow and the tet in the shell
+  for (const auto& pair : full.first_overlapping_pairs) EXPECT_TRUE(added[pair[1]]);
+  EXPECT_EQ(part.first_overlapping_pairs, full.first_overlapping_pairs);
+  EXPECT_EQ(part.overlapping_pairs, full.overlapping_pairs);
+  EXPECT_NE(std::find(full.first_leaking_tets.begin(), full.first_leaking_tets.end(), t0 + 4),
+            full.first_leaking_tets.end());
+  EXPECT_EQ(part.first_leaking_tets, full.first_leaking_tets);
+  EXPECT_EQ(part.first_outside_vertices, full.first_outside_vertices);
+  EXPECT_GT(part.outside_inner_vertices, 0u);  // the leaking tet's corner at x = 0.6
+  EXPECT_EQ(part.inverted_tets, full.inverted_tets);
+  EXPECT_EQ(part.zero_volume_tets, full.zero_volume_tets);
+  EXPECT_EQ(part.missing_triangles, full.missing_triangles);
+  EXPECT_EQ(part.nonmanifold_faces, full.nonmanifold_faces);
+  EXPECT_EQ(part.too_many_tets, full.too_many_tets);
+  EXPECT_EQ(describe_problems(part), describe_problems(full));
+  EXPECT_LT(part.overlap_candidate_pairs, full.overlap_candidate_pairs);
+
+  // Without the offenders (and their points): valid both ways.
+  m.points.resize(m.points.size() - 16);
+  m.inner.resize(m.points.size());
+  m.tets.resize(shell_tets + 1);
+  m.source_triangle.resize(shell_tets + 1);
+  added.resize(shell_tets + 1);
+  expect_nothing_reported(check_shell(s, m, options));
+  expect_nothing_reported(check_added_tets(s, m, added, options));
+  added.pop_back();
+  EXPECT_THROW(check_added_tets(s, m, added, options), InputError);
+}
+
 TEST(ShellChecks, FortyThousandTetShellsReportNothing) {
   // Sphere at detail 4: 12,640 triangles, 37,920 tets, thick (inner = 0.5 x outer) and thin
   // (0.9 x: long, flat tets whose neighbours' boxes overlap).
