@@ -43,8 +43,11 @@ RayHit ray_meets(const Ray& ray, const Vec3d& a, const Vec3d& b, const Vec3d& c,
   const double e0 = s * w0 / l_bc, e1 = s * w1 / l_ca, e2 = s * w2 / l_ab;
   const double e_min = std::min({e0, e1, e2});
   if (e_min < -eps) return RayHit::kMiss;
-  const double z = (w0 * a[ray.axis] + w1 * b[ray.axis] + w2 * c[ray.axis]) / d;
-  if (z <= ray.p[ray.axis]) return RayHit::kMiss;
+  // Where the ray meets the triangle's plane, above a (w0 + w1 + w2 = d): differences only,
+  // which stay exact far from the origin.
+  const int x = ray.axis;
+  const double z = (w1 * (b[x] - a[x]) + w2 * (c[x] - a[x])) / d;
+  if (z <= ray.p[x] - a[x]) return RayHit::kMiss;
   return e_min <= eps ? RayHit::kGraze : RayHit::kCross;
 }
 

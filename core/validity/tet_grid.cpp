@@ -24,8 +24,15 @@ bool TetGrid::contains(const BBox& b) const {
 }
 
 std::size_t TetGrid::cells_of(const TetGeometry& g, std::uint32_t* out) const {
+  // The slabs in world coordinates (g's extents are relative to its first corner), widened by
+  // what that rounds: the cell test stays conservative.
+  const Vec3d& o = g.p[0];
+  const double rounding = 1e-15 * (std::abs(o.x) + std::abs(o.y) + std::abs(o.z));
   std::array<Slab, 4> slabs;
-  for (int f = 0; f < 4; ++f) slabs[f] = {g.n[f], g.lo[f], g.hi[f]};
+  for (int f = 0; f < 4; ++f) {
+    const double at = dot(g.n[f], o);
+    slabs[f] = {g.n[f], g.lo[f] + at - rounding, g.hi[f] + at + rounding};
+  }
   return cells_in(g.box, slabs, out);
 }
 

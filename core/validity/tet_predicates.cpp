@@ -26,6 +26,15 @@ inline Interval project(const Vec3d& axis, const std::array<Vec3d, N>& p) {
   return r;
 }
 
+// The points p[k] - origin: exact for points near the origin given (Sterbenz), whatever their
+// distance from the world's.
+template <std::size_t N>
+inline std::array<Vec3d, N> relative_to(const std::array<Vec3d, N>& p, const Vec3d& origin) {
+  std::array<Vec3d, N> r;
+  for (std::size_t k = 0; k < N; ++k) r[k] = p[k] - origin;
+  return r;
+}
+
 // Whether two projections overlap by no more than `tolerance`: the axis separates them.
 inline bool apart(const Interval& a, const Interval& b, double tolerance) {
   return b.hi <= a.lo + tolerance || a.hi <= b.lo + tolerance;
@@ -58,7 +67,7 @@ TetGeometry tet_geometry(const std::array<Vec3d, 4>& p) {
     const Vec3d m = cross(p[(k + 2) % 4] - u, p[(k + 3) % 4] - u);
     const double len = norm(m);
     g.n[k] = len > 0.0 ? m / len : Vec3d{};
-    const double base = dot(g.n[k], u), opposite = dot(g.n[k], p[k]);
+    const double base = dot(g.n[k], u - p[0]), opposite = dot(g.n[k], p[k] - p[0]);
     g.lo[k] = std::min(base, opposite);
     g.hi[k] = std::max(base, opposite);
   }
@@ -66,25 +75,30 @@ TetGeometry tet_geometry(const std::array<Vec3d, 4>& p) {
 }
 
 bool geometries_overlap(const TetGeometry& a, const TetGeometry& b, double tolerance) {
+  const std::array<Vec3d, 4> b_from_a = relative_to(b.p, a.p[0]);
   for (int k = 0; k < 4; ++k)
-    if (norm2(a.n[k]) > 0.0 && apart({a.lo[k], a.hi[k]}, project(a.n[k], b.p), tolerance))
+    if (norm2(a.n[k]) > 0.0 && apart({a.lo[k], a.hi[k]}, project(a.n[k], b_from_a), tolerance))
       return false;
+  const std::array<Vec3d, 4> a_from_b = relative_to(a.p, b.p[0]);
   for (int k = 0; k < 4; ++k)
-    if (norm2(b.n[k]) > 0.0 && apart({b.lo[k], b.hi[k]}, project(b.n[k], a.p), tolerance))
+    if (norm2(b.n[k]) > 0.0 && apart({b.lo[k], b.hi[k]}, project(b.n[k], a_from_b), tolerance))
       return false;
+  const std::array<Vec3d, 4> a_from_a = relative_to(a.p, a.p[0]);
   Vec3d axis;
   for (const auto& ea : kTetEdge) {
     const Vec3d da = a.p[ea[1]] - a.p[ea[0]];
     for (const auto& eb : kTetEdge)
       if (edge_axis(da, b.p[eb[1]] - b.p[eb[0]], axis) &&
-          apart(project(axis, a.p), project(axis, b.p), tolerance))
+          apart(project(axis, a_from_a), project(axis, b_from_a), tolerance))
         return false;
   }
   return true;
 }
 
-bool triangles_cross(const std::array<Vec3d, 3>& a, const std::array<Vec3d, 3>& b,
+bool triangles_cross(const std::array<Vec3d, 3>& a_world, const std::array<Vec3d, 3>& b_world,
                      double tolerance) {
+  const std::array<Vec3d, 3> a = relative_to(a_world, a_world[0]);
+  const std::array<Vec3d, 3> b = relative_to(b_world, a_world[0]);
   const auto separated = [&](const Vec3d& axis) {
     const double len2 = norm2(axis);
     if (!(len2 > 0.0)) return false;
@@ -103,22 +117,25 @@ bool triangles_cross(const std::array<Vec3d, 3>& a, const std::array<Vec3d, 3>& 
   return true;
 }
 
-bool triangle_crosses_tet(const std::array<Vec3d, 3>& t, const TetGeometry& g, double tolerance) {
+bool triangle_crosses_tet(const std::array<Vec3d, 3>& t_world, const TetGeometry& g,
+                          double tolerance) {
+  const std::array<Vec3d, 3> t = relative_to(t_world, g.p[0]);
   for (int k = 0; k < 4; ++k)
     if (norm2(g.n[k]) > 0.0 && apart({g.lo[k], g.hi[k]}, project(g.n[k], t), tolerance))
       return false;
+  const std::array<Vec3d, 4> p = relative_to(g.p, g.p[0]);
   const Vec3d e[3] = {t[1] - t[0], t[2] - t[1], t[0] - t[2]};
   const Vec3d normal = cross(e[0], t[2] - t[0]);
   if (norm2(normal) > 0.0) {
     const Vec3d axis = normalized(normal);
     const double plane = dot(axis, t[0]);
-    if (apart({plane, plane}, project(axis, g.p), tolerance)) return false;
+    if (apart({plane, plane}, project(axis, p), tolerance)) return false;
   }
   Vec3d axis;
   for (const Vec3d& da : e)
     for (const auto& eb : kTetEdge)
-      if (edge_axis(da, g.p[eb[1]] - g.p[eb[0]], axis) &&
-          apart(project(axis, t), project(axis, g.p), tolerance))
+      if (edge_axis(da, p[eb[1]] - p[eb[0]], axis) &&
+          apart(project(axis, t), project(axis, p), tolerance))
         return false;
   return true;
 }

@@ -6,9 +6,11 @@
 // bodies and the cross products of their edges. Bodies that only touch (a shared vertex, edge or
 // face, or lying against each other) are therefore apart.
 //
-// Lengths are world units. A `tolerance` is a distance in world units; a `relative_tolerance` is
-// a multiple of the longest edge involved (dimensionless). Internal to core/validity (not
-// installed); the public entry points are tets_overlap() and tet_volume_class()
+// Every test projects differences of the bodies' corners (relative to one corner), not world
+// coordinates: far from the origin (coordinates of 1e6 round at 1e-10) the tolerance stays
+// meaningful. Lengths are world units. A `tolerance` is a distance in world units; a
+// `relative_tolerance` is a multiple of the longest edge involved (dimensionless). Internal to
+// core/validity (not installed); the public entry points are tets_overlap() and tet_volume_class()
 // (shell_checks.h).
 #pragma once
 
@@ -24,9 +26,12 @@ namespace vdb_shell {
 
 /// A tet with what the separating-axis tests need of it.
 struct TetGeometry {
-  std::array<Vec3d, 4> p;      ///< corners, world units
-  std::array<Vec3d, 4> n;      ///< unit normal of the face opposite corner k (0 if degenerate)
-  std::array<double, 4> lo{};  ///< extent of the tet along n[k], world units
+  std::array<Vec3d, 4> p;  ///< corners, world units
+  std::array<Vec3d, 4> n;  ///< unit normal of the face opposite corner k (0 if degenerate)
+  /// Extent of the tet along n[k] relative to p[0] (of the points p[j] - p[0]), world units:
+  /// the tests project differences of nearby points, never world coordinates, which far from
+  /// the origin round at more than the tolerance.
+  std::array<double, 4> lo{};
   std::array<double, 4> hi{};
   double max_edge = 0.0;  ///< longest edge, world units
   BBox box;               ///< bounding box, world units

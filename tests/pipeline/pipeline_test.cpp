@@ -438,6 +438,30 @@ TEST(Pipeline, BadSurfacesAndOptionsAreInputErrors) {
   EXPECT_NE(message_of(box, rho), "no InputError");
 }
 
+TEST(Pipeline, ShapesFarFromTheOriginGetValidShells) {
+  // Site or georeferenced coordinates: the star and the torus moved a million units away, where
+  // coordinates round at 1e-10, more than the checks' tolerance for their short edges. Each must
+  // still give a valid shell (checked independently after moving it back: the surface points
+  // come back exactly) as thick as the same shape's at the origin.
+  for (const char* name : {"star", "torus"}) {
+    SCOPED_TRACE(name);
+    const Vec3d shift{1e6, -2e6, 3e5};
+    SurfaceMesh far = make_shape(name, 1);
+    for (Vec3d& p : far.points) p = p + shift;  // rounds
+    SurfaceMesh at_origin = far;
+    for (Vec3d& p : at_origin.points) p = p - shift;  // exact
+    const ShellResult near_r = build_shell(at_origin, at_resolution(64));
+    const ShellResult far_r = build_shell(far, at_resolution(64));
+    TetMesh back = far_r.mesh;
+    for (Vec3d& p : back.points) p = p - shift;
+    for (std::size_t v = 0; v < at_origin.points.size(); ++v)
+      ASSERT_EQ(back.points[v], at_origin.points[v]) << v;
+    EXPECT_EQ(test::independent_shell_problems(at_origin, back, 2 * far_r.validity.sectors), "");
+    EXPECT_NEAR(test::independent_coverage(at_origin, back),
+                test::independent_coverage(at_origin, near_r.mesh), 0.03);
+  }
+}
+
 TEST(Pipeline, FoldedVertexGetsOneThickInnerVertexPerSector) {
   // The flap shape's top centre: fan normals in no hemisphere, so one inner vertex cannot work.
   // Its sectors' inner vertices are traced like any other: valid (checked independently),

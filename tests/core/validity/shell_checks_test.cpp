@@ -17,6 +17,7 @@
 #include "core/assemble/assemble.h"
 #include "core/base/errors.h"
 #include "core/validity/shell_checks.h"
+#include "core/validity/tet_predicates.h"
 
 namespace vdb_shell {
 namespace {
@@ -293,6 +294,34 @@ TEST(ShellChecks, TouchingTetsDoNotOverlap) {
   EXPECT_EQ(overlapping_pairs({kA, kB, kC, kD, {5, 5, 5}, {6, 5, 5}, {5, 6, 5}, {5, 5, 6}},
                               {{0, 1, 2, 3}, {4, 5, 6, 7}}),
             0u);
+}
+
+TEST(ShellChecks, TouchingAndOverlappingFarFromTheOrigin) {
+  // The same small configurations shifted far away (georeferenced scans, CAD parts in site
+  // coordinates): coordinates ~1e6 round at ~1e-10, more than the tolerance of 1e-9 of a
+  // 1e-2 edge, so the tests must not project world coordinates. Every corner is exactly
+  // representable after the shift (multiples of 2^-10).
+  const double h = 1.0 / 128;  // edge length
+  for (const Vec3d shift : {Vec3d{0, 0, 0}, Vec3d{1e6, -2e6, 3e5}, Vec3d{-7.5e7, 4e7, 1e7}}) {
+    SCOPED_TRACE(shift.x);
+    const auto at = [&](double x, double y, double z) { return shift + Vec3d{x, y, z} * h; };
+    const Vec3d a = at(0, 0, 0), b = at(1, 0, 0), c = at(0, 1, 0), d = at(0, 0, 1);
+    const Vec3d e = at(1, 1, 1);
+    // Sharing a face on opposite sides; sharing an edge; sharing a vertex: apart.
+    EXPECT_EQ(overlapping_pairs({a, b, c, d, e}, {{0, 1, 2, 3}, {4, 1, 3, 2}}), 0u);
+    EXPECT_EQ(overlapping_pairs({a, b, c, d, e, at(1, 1, -1)}, {{0, 1, 2, 3}, {1, 2, 4, 5}}), 0u);
+    EXPECT_EQ(overlapping_pairs({a, b, c, d, at(2, 0, 0), at(2, 1, 0), at(2, 0, 1)},
+                                {{0, 1, 2, 3}, {1, 4, 5, 6}}),
+              0u);
+    // Folded onto the same side, by a fraction of the edge: overlapping.
+    EXPECT_EQ(overlapping_pairs({a, b, c, d, at(0.1, 0.1, 0.1)}, {{0, 1, 2, 3}, {4, 1, 2, 3}}), 1u);
+    // Triangles sharing an edge or a vertex do not cross; one through the other does.
+    const double tol = 1e-9 * h;
+    EXPECT_FALSE(triangles_cross({a, b, c}, {b, a, d}, tol));
+    EXPECT_FALSE(triangles_cross({a, b, c}, {a, d, at(-1, 0, 1)}, tol));
+    EXPECT_TRUE(
+        triangles_cross({a, b, c}, {at(0.2, 0.2, -0.5), at(0.2, 0.2, 0.5), at(2, 2, 0)}, tol));
+  }
 }
 
 TEST(ShellChecks, TetAcrossTheTorusHoleLeaks) {

@@ -64,8 +64,8 @@ TEST(TetGrid, CellsOfATetHoldItAndAreThoseNoFacePlaneSeparates) {
           bool kept = true;
           for (int f = 0; f < 4; ++f) {
             const Vec3d& n = g.n[f];
-            const double d = dot(n, c),
-                         reach = 0.5 * h * (std::abs(n.x) + std::abs(n.y) + std::abs(n.z));
+            const double d = dot(n, c - g.p[0]),  // g's extents are relative to p[0]
+                reach = 0.5 * h * (std::abs(n.x) + std::abs(n.y) + std::abs(n.z));
             if (d - reach > g.hi[f] || d + reach < g.lo[f]) kept = false;
           }
           if (kept) tested.push_back((i * 20 + j) * 20 + k);
