@@ -93,9 +93,30 @@ TEST(FieldsPlan, RejectsCoarseResolution) {
   EXPECT_THROW(build_fields(SurfaceMesh{}, FieldOptions{}), InputError);
 }
 
+TEST(FieldsPlan, VoxelsBelowOpenVdbsSmallestAreBadInputNamingTheFix) {
+  // A unit box scaled to 1e-3: at 128^3 the voxel (7.8e-6) is below the 1.44e-5 OpenVDB's maps
+  // accept; at 64^3 (1.56e-5) it is not. The message names the unit and the finest resolution.
+  SurfaceMesh tiny = box_mesh();
+  for (Vec3d& p : tiny.points) p = p * 1e-3;
+  FieldOptions options;
+  options.resolution = 64;
+  EXPECT_NO_THROW(plan_fields(tiny, options));
+  EXPECT_NO_THROW(build_fields(tiny, options));
+  options.resolution = 128;
+  try {
+    plan_fields(tiny, options);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("smaller unit"), std::string::npos) << what;
+    EXPECT_NE(what.find("--resolution 69"), std::string::npos) << what;
+  }
+  EXPECT_THROW(build_fields(tiny, options), InputError);
+}
+
 TEST(FieldsPlan, RefusesWhatDoesNotFitBeforeAllocating) {
   FieldOptions options;
-  options.resolution = 100000;  // ~1e15 voxels: must fail fast, not be OOM-killed
+  options.resolution = 50000;  // ~1e14 voxels: must fail fast, not be OOM-killed
   try {
     build_fields(box_mesh(), options);
     FAIL() << "expected ResourceError";

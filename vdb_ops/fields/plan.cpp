@@ -173,6 +173,20 @@ FieldPlan plan_fields(const SurfaceMesh& mesh, const FieldOptions& options) {
     plan.voxel_size = side / options.resolution;
   }
   const double h = plan.voxel_size;
+  // OpenVDB's linear maps refuse a voxel of volume below 3 x 1e-15 (math/Maps.h, "Non-zero
+  // scale values required"): a surface a few thousandths of a unit across.
+  const double min_voxel = 1.0001 * std::cbrt(3.0 * openvdb::math::Tolerance<double>::value());
+  if (h < min_voxel) {
+    const double finest = side / min_voxel;
+    throw InputError(
+        "voxel size " + format_double(h) + " is below the smallest OpenVDB accepts (" +
+        format_double(min_voxel) + " input units) for a surface " + format_double(side) +
+        " units across: give its coordinates in a smaller unit (e.g. millimetres instead of "
+        "metres)" +
+        (finest >= kMinResolution
+             ? ", or use at most --resolution " + std::to_string(int(std::floor(finest)))
+             : std::string()));
+  }
   const GridFrame frame = frame_of(box, h);
   plan.origin = {frame.origin[0], frame.origin[1], frame.origin[2]};
   double voxels = 1.0;
