@@ -3,8 +3,10 @@
 #include "core/validity/search.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <map>
 #include <memory>
@@ -535,6 +537,40 @@ void collect_offenders(const SurfaceMesh& surface, const ShellInput& in, const P
   tets.erase(std::unique(tets.begin(), tets.end()), tets.end());
 }
 
+/// The indices of the points lying within `tolerance` of another of `points`, ascending: inner
+/// vertices at one place that are not one vertex (the ends of traces that met at a critical
+/// point, back from their weld). A reader that welds duplicate positions (the independent
+/// checker welds within 1e-9 of the diagonal) would join them and see non-manifold faces.
+std::vector<std::uint32_t> coincident_points(const std::vector<Vec3d>& points, double tolerance) {
+  std::vector<std::uint32_t> out;
+  if (points.size() < 2 || !(tolerance > 0)) return out;
+  BBox box;
+  for (const Vec3d& p : points) box.expand(p);
+  using Key = std::array<std::int64_t, 3>;
+  const auto key_of = [&](const Vec3d& p) {
+    Key k;
+    for (int a = 0; a < 3; ++a) k[a] = static_cast<std::int64_t>((p[a] - box.lo[a]) / tolerance);
+    return k;
+  };
+  std::vector<std::pair<Key, std::uint32_t>> cells(points.size());
+  for (std::uint32_t i = 0; i < points.size(); ++i) cells[i] = {key_of(points[i]), i};
+  std::sort(cells.begin(), cells.end());
+  for (std::uint32_t i = 0; i < points.size(); ++i) {
+    const Key k = key_of(points[i]);
+    bool near = false;
+    for (int dx = -1; dx <= 1 && !near; ++dx)
+      for (int dy = -1; dy <= 1 && !near; ++dy)
+        for (int dz = -1; dz <= 1 && !near; ++dz) {
+          const std::pair<Key, std::uint32_t> lo{{k[0] + dx, k[1] + dy, k[2] + dz}, 0};
+          for (auto it = std::lower_bound(cells.begin(), cells.end(), lo);
+               it != cells.end() && it->first == lo.first && !near; ++it)
+            near = it->second != i && distance(points[it->second], points[i]) <= tolerance;
+        }
+    if (near) out.push_back(i);
+  }
+  return out;
+}
+
 /// The prism pairs (f < g, ascending, each once) of the overlapping tet pairs of a check.
 std::vector<std::array<std::uint32_t, 2>> overlapping_prisms(const ShellCheckResult& checks,
                                                              const TetMesh& mesh) {
@@ -790,6 +826,34 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
   };
   search_rounds(true);
   give_back(search, s, options, out, lowered, seeds, search_rounds);
+  // Inner vertices at one place but not one vertex step back (each along its own trace, apart;
+  // below its floor when at it) and the rounds settle what that changed; a few passes at most,
+  // each only lowering.
+  const double coincident = 1e-8 * bounding_box(surface).diagonal();
+  for (int pass = 0; pass < 8 && out.checks.valid(); ++pass) {
+    const std::vector<std::uint32_t> slots = coincident_points(out.input.inner_points, coincident);
+    if (slots.empty()) break;
+    std::fill(lowered.begin(), lowered.end(), 0);
+    bool moved = false;
+    for (const std::uint32_t slot : slots)
+      for (const std::uint32_t v : members[slot]) {
+        if (lowered[v] || s.t[v] == 0) continue;
+        if (s.welded[v] || s.t[v] > search.floor()[v]) {
+          out.unwelded += search.step_back(s, v, options.shrink, [&](std::uint32_t u) {
+            lowered[u] = 1;
+            moved = true;
+          });
+        } else if (search.lower_floor(v, options.floor_drop, options.max_floor_drops)) {
+          s.t[v] = search.floor()[v];  // at its floor (traces meeting within it): lower it
+          lowered[v] = 1;
+          moved = true;
+          ++out.floor_drops;
+        }
+      }
+    if (!moved) break;
+    search.faces_around(lowered, seeds);
+    search_rounds(false);
+  }
 
   out.seconds = seconds_since(t0);
   monitor.milestone(0.9);  // the search is done; the final full check is the rest

@@ -36,6 +36,9 @@
 // offence is gone, takes little more than needed from those that were, and once the shell is
 // valid, ValidityOptions::give_back passes try every moved-back vertex one step deeper again
 // (the rounds step back what then offends; a pass that ends invalid is undone; docs/validity.md).
+// Last, inner vertices within 1e-8 of the surface's diagonal of each other (traces that met at
+// one point and left their weld) step back apart, their floors dropped when at them, and the
+// rounds run again: readers that weld duplicate positions would see non-manifold faces.
 //
 // Cost: one ShellChecker (shell_checks.h) serves every round, testing only the prisms that
 // moved since the previous round (or still offend); the result gets one full check_shell().

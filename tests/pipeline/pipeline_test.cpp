@@ -462,6 +462,23 @@ TEST(Pipeline, ShapesFarFromTheOriginGetValidShells) {
   }
 }
 
+TEST(Pipeline, InnerVerticesOfTracesMeetingAtOnePointAreNotLeftAtOnePoint) {
+  // A box 1 x 1 x 0.02: the traces of the top and bottom face centres meet at the box's centre,
+  // where the search once left two distinct inner vertices 2e-18 apart. Readers that weld
+  // duplicate positions (the independent checker, at 1e-9 of the diagonal) then see
+  // non-manifold faces. No two points may lie within 1e-8 of the diagonal.
+  SurfaceMesh plate = make_shape("box", 1);
+  for (Vec3d& p : plate.points) p.z *= 0.02;
+  const ShellResult r = build_shell(plate, at_resolution(128));
+  EXPECT_EQ(test::independent_shell_problems(r.surface, r.mesh, 0), "");
+  const double tolerance = 1e-8 * bounding_box(plate).diagonal();
+  std::size_t close = 0;
+  for (std::size_t i = 0; i < r.mesh.points.size(); ++i)
+    for (std::size_t j = i + 1; j < r.mesh.points.size(); ++j)
+      close += distance(r.mesh.points[i], r.mesh.points[j]) <= tolerance;
+  EXPECT_EQ(close, 0u);
+}
+
 TEST(Pipeline, FoldedVertexGetsOneThickInnerVertexPerSector) {
   // The flap shape's top centre: fan normals in no hemisphere, so one inner vertex cannot work.
   // Its sectors' inner vertices are traced like any other: valid (checked independently),
