@@ -248,18 +248,21 @@ std::uintmax_t limit_child_memory(const std::string& path) {
   std::string payload;
   const std::uintmax_t allowance = limit_child_memory(path);
   try {
-    openvdb::io::File file(path);
-    file.open(false);
-    openvdb::GridPtrVecPtr grids;
+    // Nothing read is ever destroyed here (the file and the grids are left to _exit): OpenVDB
+    // frees trees with TBB parallel loops, and a forked child has none of its parent's TBB
+    // workers, so such a loop could wait for them forever (seen: 1 run in ~200 hung in
+    // io::File::close()).
+    auto* file = new openvdb::io::File(path);
+    file->open(false);
+    auto* grids = new openvdb::GridPtrVecPtr;
     if (select) {
-      grids = std::make_shared<openvdb::GridPtrVec>();
-      grids->push_back(file.readGrid(select(*file.readAllGridMetadata())));
+      *grids = std::make_shared<openvdb::GridPtrVec>();
+      (*grids)->push_back(file->readGrid(select(*file->readAllGridMetadata())));
     } else {
-      grids = file.getGrids();
+      *grids = file->getGrids();
     }
-    file.close();
     std::ostringstream out(std::ios::binary);
-    openvdb::io::Stream(out).write(*grids);
+    openvdb::io::Stream(out).write(**grids);
     payload = out.str();
   } catch (const InputError& e) {
     code = 2;
