@@ -547,16 +547,16 @@ std::vector<std::uint32_t> coincident_points(const std::vector<Vec3d>& points, d
   BBox box;
   for (const Vec3d& p : points) box.expand(p);
   using Key = std::array<std::int64_t, 3>;
-  const auto key_of = [&](const Vec3d& p) {
-    Key k;
-    for (int a = 0; a < 3; ++a) k[a] = static_cast<std::int64_t>((p[a] - box.lo[a]) / tolerance);
-    return k;
-  };
+  std::vector<Key> key(points.size());  // per point: its cube of side `tolerance`
   std::vector<std::pair<Key, std::uint32_t>> cells(points.size());
-  for (std::uint32_t i = 0; i < points.size(); ++i) cells[i] = {key_of(points[i]), i};
+  for (std::uint32_t i = 0; i < points.size(); ++i) {
+    for (int a = 0; a < 3; ++a)
+      key[i][a] = static_cast<std::int64_t>((points[i][a] - box.lo[a]) / tolerance);
+    cells[i] = {key[i], i};
+  }
   std::sort(cells.begin(), cells.end());
   for (std::uint32_t i = 0; i < points.size(); ++i) {
-    const Key k = key_of(points[i]);
+    const Key& k = key[i];
     bool near = false;
     for (int dx = -1; dx <= 1 && !near; ++dx)
       for (int dy = -1; dy <= 1 && !near; ++dy)
@@ -836,20 +836,17 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
     std::fill(lowered.begin(), lowered.end(), 0);
     bool moved = false;
     for (const std::uint32_t slot : slots)
-      for (const std::uint32_t v : members[slot]) {
-        if (lowered[v] || s.t[v] == 0) continue;
-        if (s.welded[v] || s.t[v] > search.floor()[v]) {
+      for (const std::uint32_t v : members[slot])
+        if (!lowered[v] && (s.welded[v] || s.t[v] > search.floor()[v]))
           out.unwelded += search.step_back(s, v, options.shrink, [&](std::uint32_t u) {
             lowered[u] = 1;
             moved = true;
           });
-        } else if (search.lower_floor(v, options.floor_drop, options.max_floor_drops)) {
-          s.t[v] = search.floor()[v];  // at its floor (traces meeting within it): lower it
-          lowered[v] = 1;
-          moved = true;
-          ++out.floor_drops;
-        }
-      }
+    if (!moved)  // every one at its floor (traces meeting within it): lower the floors
+      moved = drop_floors(search, s, surface, out.shell.mesh,
+                          PointSlots(surface, out.input, out.shell.mesh), {}, {}, slots, members,
+                          static_cast<std::uint32_t>(out.input.inner_points.size()), options,
+                          lowered, out.floor_drops);
     if (!moved) break;
     search.faces_around(lowered, seeds);
     search_rounds(false);

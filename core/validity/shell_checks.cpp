@@ -95,6 +95,27 @@ std::vector<std::uint32_t> tets_near_added(const TetMesh& mesh, const std::vecto
   return out;
 }
 
+// check_shell() with the overlap and leak tests for every tet (`added` null) or only for the
+// tets flagged in `added`, against the tets whose boxes meet theirs (check_added_tets()).
+ShellCheckResult check_tets(const SurfaceMesh& surface, const TetMesh& mesh,
+                            const ShellCheckOptions& options, const std::vector<char>* added) {
+  const auto start = Clock::now();
+  ShellCheckResult result;
+  const std::vector<std::uint32_t> inner_points = check_elements(surface, mesh, options, result);
+  check_boundary_faces(surface, mesh, options, result);
+  const InsideTester inside(surface, on_surface_distance(surface, options));
+  check_inner_points(mesh, inner_points, inside, options, result);
+  if (options.check_overlaps || options.check_leaks) {
+    std::vector<std::uint32_t> queries;
+    for (std::size_t t = 0; t < mesh.tets.size(); ++t)
+      if (!added || (*added)[t]) queries.push_back(static_cast<std::uint32_t>(t));
+    check_intersections(surface, mesh, added ? tets_near_added(mesh, *added) : queries, queries,
+                        inside, options, result);
+  }
+  result.seconds = seconds_since(start);
+  return result;
+}
+
 // The cell size of surface_self_intersections()'s grid over `box`: the triangles' mean edge
 // length, grown until the grid has at most 8 cells per triangle (plus 64).
 double triangle_cell_size(const SurfaceMesh& surface, const BBox& box) {
@@ -154,42 +175,16 @@ ShellCheckResult check_volumes(const TetMesh& mesh, const ShellCheckOptions& opt
 
 ShellCheckResult check_shell(const SurfaceMesh& surface, const TetMesh& mesh,
                              const ShellCheckOptions& options) {
-  const auto start = Clock::now();
-  ShellCheckResult result;
-  const std::vector<std::uint32_t> inner_points = check_elements(surface, mesh, options, result);
-  check_boundary_faces(surface, mesh, options, result);
-  const InsideTester inside(surface, on_surface_distance(surface, options));
-  check_inner_points(mesh, inner_points, inside, options, result);
-  if (options.check_overlaps || options.check_leaks) {
-    std::vector<std::uint32_t> all(mesh.tets.size());
-    std::iota(all.begin(), all.end(), 0u);
-    check_intersections(surface, mesh, all, all, inside, options, result);
-  }
-  result.seconds = seconds_since(start);
-  return result;
+  return check_tets(surface, mesh, options, nullptr);
 }
 
 ShellCheckResult check_added_tets(const SurfaceMesh& surface, const TetMesh& mesh,
                                   const std::vector<char>& added,
                                   const ShellCheckOptions& options) {
-  const auto start = Clock::now();
-  ShellCheckResult result;
   if (added.size() != mesh.tets.size())
     throw InputError("check_added_tets: " + std::to_string(added.size()) + " flags for " +
                      std::to_string(mesh.tets.size()) + " tets; give one per tet");
-  const std::vector<std::uint32_t> inner_points = check_elements(surface, mesh, options, result);
-  check_boundary_faces(surface, mesh, options, result);
-  const InsideTester inside(surface, on_surface_distance(surface, options));
-  check_inner_points(mesh, inner_points, inside, options, result);
-  if (options.check_overlaps || options.check_leaks) {
-    std::vector<std::uint32_t> queries;
-    for (std::size_t t = 0; t < added.size(); ++t)
-      if (added[t]) queries.push_back(static_cast<std::uint32_t>(t));
-    check_intersections(surface, mesh, tets_near_added(mesh, added), queries, inside, options,
-                        result);
-  }
-  result.seconds = seconds_since(start);
-  return result;
+  return check_tets(surface, mesh, options, &added);
 }
 
 std::vector<std::array<std::uint32_t, 2>> surface_self_intersections(const SurfaceMesh& surface,
