@@ -33,6 +33,13 @@ void require(bool ok, const std::string& option, double value, const std::string
   throw InputError(message.str());
 }
 
+/// `value` as messages print numbers (6 significant digits).
+std::string text(double value) {
+  std::ostringstream out;
+  out << value;
+  return out.str();
+}
+
 /// Runs `body` in a TBB arena of `threads` workers (0: the default arena, all cores).
 template <class Body>
 auto in_arena(int threads, const Body& body) {
@@ -164,6 +171,52 @@ SurfaceMesh inner_surface_of(const SurfaceMesh& mesh, const ShellInput& input) {
   for (const Triangle& t : mesh.triangles)
     inner.triangles.push_back({id[t[0]], id[t[2]], id[t[1]]});
   return inner;
+}
+
+/// OpenVDB's linear maps refuse voxels under min_voxel_size() (1.44e-5 units: a surface under
+/// ~2e-3 units across at 128^3). Such a surface is shelled at 2^k times its size, k making the
+/// voxel size at least 1/128, and the results are scaled back: multiplying by a power of two is
+/// exact both ways, so the shell is exactly the scaled surface's shell, scaled. 0 when the
+/// voxels are large enough (the output is then the unscaled run's, to the byte).
+int field_scale_exponent(double voxel_size) {
+  if (!(voxel_size > 0) || voxel_size >= 2 * min_voxel_size()) return 0;
+  return -std::ilogb(voxel_size) - 7;
+}
+
+/// The voxel size of the fields build_fields() would build for `mesh`, world units.
+double planned_voxel_size(const SurfaceMesh& mesh, const FieldOptions& options) {
+  return options.voxel_size > 0 ? options.voxel_size
+                                : bounding_box(mesh).max_side() / options.resolution;
+}
+
+void scale_points(std::vector<Vec3d>& points, double s) {
+  for (Vec3d& p : points) p *= s;
+}
+
+/// `options` with every length scaled by `s` (the dimensionless ones as they are).
+ShellOptions scaled_options(ShellOptions o, double s) {
+  o.fields.voxel_size *= s;
+  o.trace.step *= s;
+  o.trace.point_size *= s;
+  o.thickness.max_thickness *= s;
+  if (o.thickness.weld_tolerance > 0) o.thickness.weld_tolerance *= s;
+  o.repair_voxel_size *= s;
+  return o;
+}
+
+/// Scales every length a result holds by `s`: the shell, the inner surface, the traces, the
+/// voxel size and the volumes. The surface and the options are the caller's to set.
+void scale_result(ShellResult& r, double s) {
+  scale_points(r.mesh.points, s);
+  for (double& t : r.mesh.thickness) t *= s;
+  scale_points(r.inner_surface.points, s);
+  scale_points(r.traces.samples, s);
+  for (double& a : r.traces.arc_length) a *= s;
+  r.traces.parameters.step *= s;
+  r.traces.parameters.point_size *= s;
+  r.field_stats.voxel_size *= s;
+  r.quality.shell_volume *= s * s * s;
+  r.quality.enclosed_volume *= s * s * s;
 }
 
 ShellResult run(const LoadedSurface& surface, const ShellOptions& options,
@@ -396,7 +449,23 @@ LoadedSurface load_repaired_surface(const PolygonSoup& soup, const std::string& 
     return kept;
   } catch (const InputError&) {  // something to repair
   }
-  const PolygonSoup rebuilt = repair_surface(soup, repair, source, report);
+  // The repair's volume has the voxels of the fields: built at 2^k times the size when they are
+  // too small for OpenVDB (field_scale_exponent()), scaled back exactly.
+  const int k = field_scale_exponent(repair.voxel_size);
+  PolygonSoup rebuilt;
+  if (k == 0) {
+    rebuilt = repair_surface(soup, repair, source, report);
+  } else {
+    PolygonSoup scaled = soup;
+    scale_points(scaled.points, std::ldexp(1.0, k));
+    repair.voxel_size = std::ldexp(repair.voxel_size, k);
+    rebuilt = repair_surface(scaled, repair, source, report);
+    const double s = std::ldexp(1.0, -k);
+    scale_points(rebuilt.points, s);
+    for (double* length : {&report.voxel_size, &report.distance_max, &report.distance_mean,
+                           &report.input_distance_max, &report.input_distance_mean})
+      *length *= s;
+  }
   try {
     LoadedSurface surface = make_surface(rebuilt, source + " (repaired)");
     surface.notices.insert(
@@ -415,7 +484,27 @@ ShellResult build_shell(const LoadedSurface& surface, const ShellOptions& option
   check_options(options);
   if (surface.mesh.triangles.empty())
     throw InputError(surface.source + ": the surface has no triangles; give a closed surface");
-  return in_arena(options.threads, [&] { return run(surface, options, control); });
+  const double h = planned_voxel_size(surface.mesh, options.fields);
+  const int k = options.level_set.empty() ? field_scale_exponent(h) : 0;
+  if (k == 0) return in_arena(options.threads, [&] { return run(surface, options, control); });
+  if (options.keep_fields)
+    throw InputError(surface.source + ": its voxel size " + text(h) +
+                     " is below the smallest a .vdb grid can have (" + text(min_voxel_size()) +
+                     "): to keep or write the fields, give its coordinates in a smaller unit "
+                     "(e.g. millimetres instead of metres)");
+  LoadedSurface scaled = surface;
+  scale_points(scaled.mesh.points, std::ldexp(1.0, k));
+  ShellResult r = in_arena(options.threads, [&] {
+    return run(scaled, scaled_options(options, std::ldexp(1.0, k)), control);
+  });
+  scale_result(r, std::ldexp(1.0, -k));
+  r.options = options;
+  r.input = {surface.source, surface.stats, surface.flipped};
+  r.surface = surface.mesh;
+  r.notices.push_back("the voxel size " + text(h) +
+                      " is below the smallest OpenVDB accepts: the shell was built at 2^" +
+                      std::to_string(k) + " times the surface's size and scaled back exactly");
+  return r;
 }
 
 ShellResult build_shell(const SurfaceMesh& mesh, const ShellOptions& options,

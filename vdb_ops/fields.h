@@ -173,10 +173,16 @@ class Fields : public FieldSampler {
   std::unique_ptr<Impl> impl_;
 };
 
+/// The smallest voxel size OpenVDB's linear maps accept, world units (1.44e-5: a voxel volume
+/// of 3e-15, math/Maps.h). build_shell() builds the fields of a surface whose voxels would be
+/// smaller at a power of two times its size.
+double min_voxel_size();
+
 /// Derives the voxel size, grid extent and memory estimate of build_fields(mesh, options).
 /// \throw InputError if the mesh is empty, the options are invalid (resolution < kMinResolution,
 ///        voxel_size giving fewer than kMinResolution voxels along the longest side, NaN or
-///        negative values, flux_min outside [0, 1]), or index coordinates would overflow.
+///        negative values, flux_min outside [0, 1]), the voxel size is below min_voxel_size(), or
+///        index coordinates would overflow.
 /// \throw ResourceError if the estimate exceeds max_memory_gb or 90% of the physical memory.
 FieldPlan plan_fields(const SurfaceMesh& mesh, const FieldOptions& options);
 

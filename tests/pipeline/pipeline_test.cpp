@@ -462,6 +462,54 @@ TEST(Pipeline, ShapesFarFromTheOriginGetValidShells) {
   }
 }
 
+TEST(Pipeline, TinySurfacesAreShelledAsThemselvesScaledExactly) {
+  // Coordinates in metres of a part a millimetre across: at 128^3 its voxels are below the
+  // smallest OpenVDB's maps accept. The torus and the star at 2^-20 (~1e-6 across) and 2^-60 must
+  // give exactly the shell of the shape at its own size, scaled: the same tets, every point and
+  // thickness the scaled one to the bit, the volumes and the voxel size scaled. The shells of
+  // the tiny shapes are also checked independently as they are.
+  for (const char* name : {"torus", "star"}) {
+    const SurfaceMesh shape = make_shape(name, 1);
+    const ShellResult big = build_shell(shape, at_resolution(64));
+    for (const int k : {-20, -60}) {
+      SCOPED_TRACE(std::string(name) + " at 2^" + std::to_string(k));
+      const double s = std::ldexp(1.0, k);
+      SurfaceMesh tiny = shape;
+      for (Vec3d& p : tiny.points) p *= s;
+      const ShellResult r = build_shell(tiny, at_resolution(64));
+      EXPECT_EQ(test::independent_shell_problems(tiny, r.mesh, 2 * r.validity.sectors), "");
+      ASSERT_EQ(r.mesh.tets, big.mesh.tets);
+      ASSERT_EQ(r.mesh.points.size(), big.mesh.points.size());
+      for (std::size_t i = 0; i < r.mesh.points.size(); ++i) {
+        ASSERT_EQ(r.mesh.points[i], big.mesh.points[i] * s) << i;
+        ASSERT_EQ(r.mesh.thickness[i], big.mesh.thickness[i] * s) << i;
+      }
+      EXPECT_EQ(r.inner_surface.points.size(), big.inner_surface.points.size());
+      EXPECT_EQ(r.surface.points, tiny.points);
+      EXPECT_EQ(r.field_stats.voxel_size, big.field_stats.voxel_size * s);
+      EXPECT_EQ(r.traces.samples.back(), big.traces.samples.back() * s);
+      EXPECT_EQ(r.quality.coverage, big.quality.coverage);
+      EXPECT_EQ(r.quality.shell_volume, big.quality.shell_volume * s * s * s);
+      EXPECT_EQ(r.input.stats.enclosed_volume, big.input.stats.enclosed_volume * s * s * s);
+      EXPECT_NEAR(test::independent_coverage(tiny, r.mesh), r.quality.coverage, 1e-9);
+      EXPECT_EQ(r.options.fields.resolution, 64);
+      ASSERT_FALSE(r.notices.empty());
+      EXPECT_NE(r.notices.back().find("scaled back exactly"), std::string::npos);
+    }
+  }
+  // The fields of such a surface cannot be stored in a .vdb: keeping them is refused up front.
+  SurfaceMesh tiny = make_shape("torus", 1);
+  for (Vec3d& p : tiny.points) p *= std::ldexp(1.0, -20);
+  ShellOptions keep = at_resolution(64);
+  keep.keep_fields = true;
+  try {
+    build_shell(tiny, keep);
+    ADD_FAILURE() << "keeping the fields of a tiny surface was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("smaller unit"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Pipeline, InnerVerticesOfTracesMeetingAtOnePointAreNotLeftAtOnePoint) {
   // A box 1 x 1 x 0.02: the traces of the top and bottom face centres meet at the box's centre,
   // where the search once left two distinct inner vertices 2e-18 apart. Readers that weld

@@ -129,6 +129,27 @@ TEST(Repair, PunchedHolesAreCapped) {
   EXPECT_NEAR(r.surface.stats.enclosed_volume, volume, 0.03 * volume);
 }
 
+TEST(Repair, ATinyInputIsRepairedAsItselfScaledExactly) {
+  // The punched sphere at 2^-30 (~1e-9 across): its volume's voxels are below the smallest
+  // OpenVDB accepts, so it is repaired at its own size and scaled back — the same surface, to the
+  // bit, and the report's lengths scaled.
+  PolygonSoup input = soup_of(make_shape("sphere"));
+  input.polygons.erase(input.polygons.begin() + 500);
+  const double s = std::ldexp(1.0, -30);
+  PolygonSoup tiny = input;
+  for (Vec3d& p : tiny.points) p *= s;
+  const Repaired big = repair(input, 48, 3.0), r = repair(tiny, 48, 3.0);
+  ASSERT_EQ(r.surface.mesh.triangles, big.surface.mesh.triangles);
+  ASSERT_EQ(r.surface.mesh.points.size(), big.surface.mesh.points.size());
+  for (std::size_t i = 0; i < r.surface.mesh.points.size(); ++i)
+    ASSERT_EQ(r.surface.mesh.points[i], big.surface.mesh.points[i] * s) << i;
+  EXPECT_EQ(r.report.voxel_size, big.report.voxel_size * s);
+  EXPECT_EQ(r.report.distance_max, big.report.distance_max * s);
+  EXPECT_EQ(r.report.input_distance_max, big.report.input_distance_max * s);
+  EXPECT_EQ(r.report.holes_closed, 1u);
+  EXPECT_LT(max_distance(tiny.points, soup_of(r.surface.mesh)), 1.0 * r.h);
+}
+
 TEST(Repair, SeamsStoredTwiceAndOverlappingPartsBecomeOneSolid) {
   // Each triangle with corners of its own (an STL-like soup), and a second sphere moved by a
   // radius: two overlapping parts. The repair is their union: one component whose volume lies

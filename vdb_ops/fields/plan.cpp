@@ -131,6 +131,11 @@ IndexMesh to_index_space(const SurfaceMesh& mesh, const openvdb::math::Transform
 
 using namespace fields_detail;
 
+double min_voxel_size() {
+  // The linear maps refuse a voxel of volume below 3 x 1e-15 ("Non-zero scale values required").
+  return 1.0001 * std::cbrt(3.0 * openvdb::math::Tolerance<double>::value());
+}
+
 FieldPlan plan_fields(const SurfaceMesh& mesh, const FieldOptions& options) {
   if (mesh.num_faces() == 0 || mesh.num_vertices() < 4) {
     throw InputError("cannot build fields: the surface has no faces");
@@ -173,9 +178,7 @@ FieldPlan plan_fields(const SurfaceMesh& mesh, const FieldOptions& options) {
     plan.voxel_size = side / options.resolution;
   }
   const double h = plan.voxel_size;
-  // OpenVDB's linear maps refuse a voxel of volume below 3 x 1e-15 (math/Maps.h, "Non-zero
-  // scale values required"): a surface a few thousandths of a unit across.
-  const double min_voxel = 1.0001 * std::cbrt(3.0 * openvdb::math::Tolerance<double>::value());
+  const double min_voxel = min_voxel_size();
   if (h < min_voxel) {
     const double finest = side / min_voxel;
     throw InputError(
