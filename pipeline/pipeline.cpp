@@ -177,8 +177,8 @@ SurfaceMesh inner_surface_of(const SurfaceMesh& mesh, const ShellInput& input) {
 /// ~2e-3 units across at 128^3), and volumes and squared lengths of voxels over 2^32 units
 /// (a surface 1e100 units across) overflow. Such a surface is shelled at 2^k times its size, k
 /// making the voxel size 1/128 to 1/64, and the results are scaled back: multiplying by a power of
-/// two is exact both ways, so the shell is exactly the scaled surface's shell, scaled. 0 when the
-/// voxels are large enough (the output is then the unscaled run's, to the byte).
+/// two is exact both ways, so the shell is exactly the scaled surface's shell, scaled. 0 for voxels
+/// in between (the output is then the unscaled run's, to the byte).
 int field_scale_exponent(double voxel_size) {
   if (!(voxel_size > 0) || (voxel_size >= 2 * min_voxel_size() && voxel_size <= 0x1p32)) return 0;
   return -std::ilogb(voxel_size) - 7;
