@@ -488,22 +488,23 @@ ShellResult build_shell(const LoadedSurface& surface, const ShellOptions& option
   const double h = planned_voxel_size(surface.mesh, options.fields);
   const int k = options.level_set.empty() ? field_scale_exponent(h) : 0;
   if (k == 0) return in_arena(options.threads, [&] { return run(surface, options, control); });
+  const char* why =
+      k > 0 ? " is below the smallest OpenVDB accepts (" : " is above the largest kept (";
+  const std::string limit = text(k > 0 ? min_voxel_size() : 0x1p32) + " units)";
   if (options.keep_fields)
-    throw InputError(surface.source + ": its voxel size " + text(h) +
-                     " is below the smallest a .vdb grid can have (" + text(min_voxel_size()) +
-                     "): to keep or write the fields, give its coordinates in a smaller unit "
-                     "(e.g. millimetres instead of metres)");
+    throw InputError(surface.source + ": its voxel size " + text(h) + why + limit +
+                     ": to keep or write the fields, give its coordinates in a " +
+                     (k > 0 ? "smaller unit (e.g. millimetres instead of metres)" : "larger unit"));
+  const double scale = std::ldexp(1.0, k);
   LoadedSurface scaled = surface;
-  scale_points(scaled.mesh.points, std::ldexp(1.0, k));
-  ShellResult r = in_arena(options.threads, [&] {
-    return run(scaled, scaled_options(options, std::ldexp(1.0, k)), control);
-  });
-  scale_result(r, std::ldexp(1.0, -k));
+  scale_points(scaled.mesh.points, scale);
+  ShellResult r = in_arena(options.threads,
+                           [&] { return run(scaled, scaled_options(options, scale), control); });
+  scale_result(r, 1.0 / scale);
   r.options = options;
   r.input = {surface.source, surface.stats, surface.flipped};
   r.surface = surface.mesh;
-  r.notices.push_back("the voxel size " + text(h) +
-                      " is below the smallest OpenVDB accepts: the shell was built at 2^" +
+  r.notices.push_back("the voxel size " + text(h) + why + limit + ": the shell was built at 2^" +
                       std::to_string(k) + " times the surface's size and scaled back exactly");
   return r;
 }
