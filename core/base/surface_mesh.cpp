@@ -2,6 +2,7 @@
 #include "core/base/surface_mesh.h"
 
 #include <algorithm>
+#include <cmath>
 #include <utility>
 
 namespace vdb_shell {
@@ -45,6 +46,20 @@ double mean_edge_length(const SurfaceMesh& mesh) {
   double sum = 0.0;
   for (const auto& e : edges) sum += distance(mesh.points[e.first], mesh.points[e.second]);
   return sum / static_cast<double>(edges.size());
+}
+
+int unit_scale_exponent(const std::vector<Vec3d>& points) {
+  double largest = 0.0;
+  for (const Vec3d& p : points)
+    largest = std::max({largest, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+  return largest > 0.0 && std::isfinite(largest) ? -std::ilogb(largest) : 0;
+}
+
+std::vector<Vec3d> scaled_by_power_of_two(const std::vector<Vec3d>& points, int k) {
+  std::vector<Vec3d> out(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i)
+    out[i] = {std::ldexp(points[i].x, k), std::ldexp(points[i].y, k), std::ldexp(points[i].z, k)};
+  return out;
 }
 
 }  // namespace vdb_shell

@@ -36,4 +36,13 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> unique_edges(const SurfaceM
 /// Mean length of the mesh's edges (each undirected edge counted once).
 double mean_edge_length(const SurfaceMesh& mesh);
 
+/// The power of two k for which 2^k times the largest coordinate magnitude of `points` lies in
+/// [1, 2); 0 when there is none but 0. Scale-free computations run on points scaled by it (exact
+/// both ways) so that squared lengths, areas and volumes neither overflow nor underflow,
+/// whatever the input's unit.
+int unit_scale_exponent(const std::vector<Vec3d>& points);
+/// `points` times 2^k, coordinate by coordinate (std::ldexp: exact unless it leaves the range of
+/// normal doubles).
+std::vector<Vec3d> scaled_by_power_of_two(const std::vector<Vec3d>& points, int k);
+
 }  // namespace vdb_shell

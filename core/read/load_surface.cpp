@@ -103,9 +103,20 @@ std::vector<SoupTriangle> fan_triangulate(const PolygonSoup& soup) {
 }
 
 /// The triangles of a soup whose indices and coordinates are valid, with names for messages.
+/// The geometric checks read points(): the soup's points times 2^scale (unit_scale_exponent()),
+/// so that they hold for any unit; messages name the soup's own points.
 struct SoupFaces {
   const PolygonSoup& soup;
   std::vector<SoupTriangle> tris;
+  int scale = unit_scale_exponent(soup.points);
+  std::vector<Vec3d> scaled =
+      scale == 0 ? std::vector<Vec3d>{} : scaled_by_power_of_two(soup.points, scale);
+
+  const std::vector<Vec3d>& points() const { return scale == 0 ? soup.points : scaled; }
+  /// A point of points()' frame, named in the soup's.
+  std::string point_name(const Vec3d& p) const {
+    return fmt_point({std::ldexp(p.x, -scale), std::ldexp(p.y, -scale), std::ldexp(p.z, -scale)});
+  }
 
   std::string face_name(const SoupTriangle& t) const {
     const bool tri_only = soup.polygons[t.polygon].size() == 3;
@@ -152,7 +163,7 @@ bool check_elements(const PolygonSoup& soup, std::size_t max,
 /// Faces of zero area (a repeated corner, or below the area threshold); marks them.
 void check_degenerate(const SoupFaces& f, const ValidationOptions& options,
                       ProblemCollector& degenerate, std::vector<char>& is_degenerate) {
-  const auto& pts = f.soup.points;
+  const auto& pts = f.points();
   BBox box;
   for (const Vec3d& p : pts) box.expand(p);
   const double diag = box.diagonal();
@@ -167,7 +178,7 @@ void check_degenerate(const SoupFaces& f, const ValidationOptions& options,
       is_degenerate[t] = 1;
       degenerate.add(f.face_name(f.tris[t]) + " (" + std::to_string(v[0]) + ", " +
                      std::to_string(v[1]) + ", " + std::to_string(v[2]) + ") at " +
-                     fmt_point(pts[v[0]]));
+                     fmt_point(f.soup.points[v[0]]));
     }
   }
 }
@@ -247,14 +258,14 @@ void check_vertices(const SoupFaces& f, const std::vector<char>& is_degenerate,
 /// of the crossing.
 void check_crossings(const SoupFaces& faces, ProblemCollector& crossing) {
   SurfaceMesh mesh;
-  mesh.points = faces.soup.points;
+  mesh.points = faces.points();
   mesh.triangles.reserve(faces.tris.size());
   for (const SoupTriangle& t : faces.tris) mesh.triangles.push_back(t.v);
   for (const auto& [f, g] : surface_self_intersections(mesh, SIZE_MAX))
     crossing.add(crossing.examples.size() >= crossing.max
                      ? std::string()
                      : faces.face_name(faces.tris[f]) + " and " + faces.face_name(faces.tris[g]) +
-                           " cross at " + fmt_point(triangles_crossing_point(mesh, f, g)));
+                           " cross at " + faces.point_name(triangles_crossing_point(mesh, f, g)));
 }
 
 }  // namespace
@@ -311,8 +322,11 @@ SurfaceStats surface_stats(const SurfaceMesh& mesh) {
   s.vertices = mesh.points.size();
   s.faces = mesh.triangles.size();
   s.bbox = bounding_box(mesh);
-  s.mean_edge_length = mean_edge_length(mesh);
-  s.enclosed_volume = signed_volume(mesh);
+  // Measured at unit scale: only a volume beyond the doubles' range is Inf (or 0).
+  const int k = unit_scale_exponent(mesh.points);
+  const SurfaceMesh unit{scaled_by_power_of_two(mesh.points, k), mesh.triangles};
+  s.mean_edge_length = std::ldexp(mean_edge_length(unit), -k);
+  s.enclosed_volume = std::ldexp(signed_volume(unit), -3 * k);
 
   DisjointSets sets(mesh.points.size());
   for (const Triangle& t : mesh.triangles) {
@@ -374,7 +388,11 @@ LoadedSurface make_surface(const PolygonSoup& soup, const std::string& source,
   for (const SoupTriangle& t : fan_triangulate(soup))
     out.mesh.triangles.push_back({remap[t.v[0]], remap[t.v[1]], remap[t.v[2]]});
 
-  if (signed_volume(out.mesh) < 0.0) {
+  // The volume's sign at unit scale, where it neither overflows nor underflows.
+  const SurfaceMesh unit{
+      scaled_by_power_of_two(out.mesh.points, unit_scale_exponent(out.mesh.points)),
+      out.mesh.triangles};
+  if (signed_volume(unit) < 0.0) {
     for (Triangle& t : out.mesh.triangles) std::swap(t[1], t[2]);
     out.flipped = true;
     out.notices.push_back(

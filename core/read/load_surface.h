@@ -6,7 +6,9 @@
 // edges, non-manifold edges and vertices, inconsistent orientation, and (on a surface that
 // passes all of those) faces that cross each other. Several components are
 // allowed. A surface whose enclosed volume is negative (normals pointing in) is flipped and a
-// notice says so. Vertices no face uses are dropped with a notice.
+// notice says so. Vertices no face uses are dropped with a notice. The geometric rules (areas,
+// crossings, orientation) are judged on the points scaled by a power of two to unit magnitude,
+// exactly, so the verdicts do not depend on the input's unit; messages name the input's points.
 #pragma once
 
 #include <cstddef>

@@ -462,22 +462,27 @@ TEST(Pipeline, ShapesFarFromTheOriginGetValidShells) {
   }
 }
 
-TEST(Pipeline, TinySurfacesAreShelledAsThemselvesScaledExactly) {
+TEST(Pipeline, TinyAndHugeSurfacesAreShelledAsThemselvesScaledExactly) {
   // Coordinates in metres of a part a millimetre across: at 128^3 its voxels are below the
   // smallest OpenVDB's maps accept. The torus and the star at 2^-20 (~1e-6 across) and 2^-60 must
   // give exactly the shell of the shape at its own size, scaled: the same tets, every point and
-  // thickness the scaled one to the bit, the volumes and the voxel size scaled. The shells of
-  // the tiny shapes are also checked independently as they are.
+  // thickness the scaled one to the bit, the volumes and the voxel size scaled. So must the
+  // shapes at 2^-600 and 2^600 (1e-181, 4e180), where squared lengths leave the doubles' range.
+  // The shells at their own size and at 2^-20 and 2^-60 are also checked independently.
   for (const char* name : {"torus", "star"}) {
     const SurfaceMesh shape = make_shape(name, 1);
     const ShellResult big = build_shell(shape, at_resolution(64));
-    for (const int k : {-20, -60}) {
+    EXPECT_EQ(test::independent_shell_problems(shape, big.mesh, 2 * big.validity.sectors), "");
+    for (const int k : {-20, -60, -600, 600}) {
       SCOPED_TRACE(std::string(name) + " at 2^" + std::to_string(k));
       const double s = std::ldexp(1.0, k);
       SurfaceMesh tiny = shape;
       for (Vec3d& p : tiny.points) p *= s;
       const ShellResult r = build_shell(tiny, at_resolution(64));
-      EXPECT_EQ(test::independent_shell_problems(tiny, r.mesh, 2 * r.validity.sectors), "");
+      if (std::abs(k) <= 100) {  // the independent computations square and cube lengths
+        EXPECT_EQ(test::independent_shell_problems(tiny, r.mesh, 2 * r.validity.sectors), "");
+        EXPECT_NEAR(test::independent_coverage(tiny, r.mesh), r.quality.coverage, 1e-9);
+      }
       ASSERT_EQ(r.mesh.tets, big.mesh.tets);
       ASSERT_EQ(r.mesh.points.size(), big.mesh.points.size());
       for (std::size_t i = 0; i < r.mesh.points.size(); ++i) {
@@ -489,9 +494,8 @@ TEST(Pipeline, TinySurfacesAreShelledAsThemselvesScaledExactly) {
       EXPECT_EQ(r.field_stats.voxel_size, big.field_stats.voxel_size * s);
       EXPECT_EQ(r.traces.samples.back(), big.traces.samples.back() * s);
       EXPECT_EQ(r.quality.coverage, big.quality.coverage);
-      EXPECT_EQ(r.quality.shell_volume, big.quality.shell_volume * s * s * s);
-      EXPECT_EQ(r.input.stats.enclosed_volume, big.input.stats.enclosed_volume * s * s * s);
-      EXPECT_NEAR(test::independent_coverage(tiny, r.mesh), r.quality.coverage, 1e-9);
+      EXPECT_EQ(r.quality.shell_volume, std::ldexp(big.quality.shell_volume, 3 * k));
+      EXPECT_EQ(r.input.stats.enclosed_volume, std::ldexp(big.input.stats.enclosed_volume, 3 * k));
       EXPECT_EQ(r.options.fields.resolution, 64);
       ASSERT_FALSE(r.notices.empty());
       EXPECT_NE(r.notices.back().find("scaled back exactly"), std::string::npos);

@@ -179,6 +179,71 @@ TEST(Validate, CrossingSurfaceIsRefusedNamingFacesAndAPoint) {
   EXPECT_EQ(load_error("touching.obj", two_cubes_obj({1, 0.25, 0.25})), "");
 }
 
+/// `text`'s OBJ vertices times 2^k (std::ldexp: exact), as a soup.
+PolygonSoup scaled_obj_soup(const std::string& text, int k) {
+  TempDir dir;
+  write_text(dir.file("m.obj"), text);
+  PolygonSoup soup = read_polygon_soup(dir.file("m.obj"));
+  for (Vec3d& p : soup.points) p = {std::ldexp(p.x, k), std::ldexp(p.y, k), std::ldexp(p.z, k)};
+  return soup;
+}
+
+TEST(Validate, VerdictsAndMessagesHoldInAnyUnit) {
+  // Squared lengths, areas and the crossing predicates overflow beyond ~1e150 and underflow
+  // below ~1e-150: a surface given in such units once drew false "degenerate faces" and
+  // "self-intersections". The same surfaces at 2^k times their size, k from -1000 (1e-301) to
+  // 1000 (1e301), must draw the same verdicts as at their own size, with points named in the
+  // input's coordinates.
+  const std::string crossing = two_cubes_obj({0.5, 0.25, 0.25});
+  const std::string touching = two_cubes_obj({1, 0.25, 0.25});
+  const std::string inward =
+      "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 4 2\nf 2 4 3\nf 3 4 1\n";
+  for (const int k : {-1000, -500, -200, 0, 200, 500, 1000}) {
+    SCOPED_TRACE("at 2^" + std::to_string(k));
+    const double s = std::ldexp(1.0, k);
+    // Clean: the touching cubes, with exact lengths; the inward tet flipped, its volume positive.
+    const LoadedSurface cubes = make_surface(scaled_obj_soup(touching, k), "touching");
+    EXPECT_EQ(cubes.stats.mean_edge_length,
+              std::ldexp(make_surface(scaled_obj_soup(touching, 0), "").stats.mean_edge_length, k));
+    const LoadedSurface tet = make_surface(scaled_obj_soup(inward, k), "inward");
+    EXPECT_TRUE(tet.flipped);
+    EXPECT_EQ(tet.stats.enclosed_volume, std::ldexp(1.0 / 6.0, 3 * k));
+    // Crossing: refused, the crossing point on a face plane of each cube, in input coordinates.
+    const std::vector<SurfaceProblem> problems =
+        find_surface_problems(scaled_obj_soup(crossing, k));
+    ASSERT_EQ(problems.size(), 1u);
+    EXPECT_TRUE(contains(problems[0].rule, "self-intersections")) << problems[0].rule;
+    double x = 0, y = 0, z = 0;
+    ASSERT_EQ(std::sscanf(problems[0].first.c_str() + problems[0].first.find(" cross at ("),
+                          " cross at (%lf, %lf, %lf)", &x, &y, &z),
+              3)
+        << problems[0].first;
+    x /= s;
+    y /= s;
+    z /= s;
+    const auto on = [](double v, double a) {
+      return std::abs(v - a) < 1e-5 || std::abs(v - a - 1) < 1e-5;  // "%.6g" in the message
+    };
+    EXPECT_TRUE(on(x, 0) || on(y, 0) || on(z, 0)) << problems[0].first;
+    EXPECT_TRUE(on(x, 0.5) || on(y, 0.25) || on(z, 0.25)) << problems[0].first;
+    // A missing face: three boundary edges, named at the input's positions.
+    const std::vector<SurfaceProblem> open = find_surface_problems(scaled_obj_soup(cube_obj(0), k));
+    ASSERT_EQ(open.size(), 1u);
+    EXPECT_EQ(open[0].count, 3u);
+    char corner[64];
+    std::snprintf(corner, sizeof corner, "-(%.6g, %.6g, %.6g)", s, 0.0, 0.0);  // edge (0, 1)
+    EXPECT_TRUE(contains(open[0].first, corner)) << open[0].first;
+    // A zero-area face among faces of the 1e-14 fraction's area, as at unit size.
+    PolygonSoup sliver;
+    sliver.points = {{0, 0, 0}, {s, 0, 0}, {0, s, 0}, {0, 0, s}, {2 * s, 0, 0}};
+    sliver.polygons = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {2, 0, 3}, {0, 1, 4}};
+    std::size_t degenerate = 0;
+    for (const SurfaceProblem& p : find_surface_problems(sliver))
+      if (contains(p.rule, "degenerate")) degenerate = p.count;
+    EXPECT_EQ(degenerate, 1u);
+  }
+}
+
 TEST(Validate, InwardSurfaceIsFlippedWithNotice) {
   PolygonSoup soup;
   soup.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
