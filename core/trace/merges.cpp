@@ -428,6 +428,25 @@ class SampleGrid {
   std::vector<BinMask> near_block_bins_;    ///< per block: the bins of it and its 26 neighbours
 };
 
+/// The sample of trace j from its sample i on, within `ps` of arc past it, nearest to `target`
+/// (the first of equals): where a trace that came within the point size of its partner's sample
+/// at sample i passes it. Straight on towards it, it gets there within `ps`.
+std::uint32_t closest_approach(const TraceResult& r, std::uint32_t j, std::uint32_t i,
+                               const Vec3d& target, double ps) {
+  const std::size_t first = r.offsets[j];
+  std::uint32_t best = i;
+  double best_d2 = norm2(r.samples[first + i] - target);
+  for (std::uint32_t m = i + 1;
+       m <= r.end[j] && r.arc_length[first + m] - r.arc_length[first + i] <= ps; ++m) {
+    const double d2 = norm2(r.samples[first + m] - target);
+    if (d2 < best_d2) {
+      best_d2 = d2;
+      best = m;
+    }
+  }
+  return best;
+}
+
 }  // namespace
 
 void resolve_merges(TraceResult& r, const std::vector<std::uint32_t>& which,
@@ -516,7 +535,7 @@ void resolve_merges(TraceResult& r, const std::vector<std::uint32_t>& which,
             partner[w] = k;
           }
         }
-        if (partner[w] >= 0) new_end[w] = i;
+        if (partner[w] >= 0) new_end[w] = closest_approach(r, j, i, r.samples[best_sample], ps);
       }
     }
   });

@@ -7,7 +7,12 @@
 //   * traces that started within the point size of each other never merge (side by side);
 //   * two samples whose directions (sample_direction) lie within the merge angle of each other
 //     never merge (traces running the same way, not a junction);
-// and its partner is the nearest such sample, ties going to the smallest (trace, sample).
+// and its partner is the nearest such sample, ties going to the smallest (trace, sample). The trace
+// then ends at its merge point: of its samples from that first one to one point size of arc
+// past it, the one nearest the partner's sample (the first of equals) — where it passes the
+// partner's path, not up to a point size short of it. Where traces cross a thin part from both
+// sides onto traces running along its medial surface, stopping short left a slab of the point
+// size uncovered between the two sides.
 //
 // The queries run against a grid of the eligible samples: cubic cells of side the point size
 // (larger only where the samples' extent would overflow 18 bits of cell index), each cell's

@@ -238,11 +238,12 @@ Vec3d direction_at(const TraceResult& r, std::size_t v, std::size_t i) {
                    : normalized(r.sample(v, i) - r.sample(v, i - 1));
 }
 
-/// merges.h's rule over every pair of samples: each trace of `which` ends at its first sample
+/// merges.h's rule over every pair of samples: each trace of `which` merges at its first sample
 /// within the point size of an eligible sample of another trace of `indexed` that did not start
 /// within the point size of it and runs at more than the merge angle to it; the partner is the
-/// nearest, ties to the smallest (trace, sample). Bounding boxes of blocks of 8 samples only skip
-/// samples farther than the point size.
+/// nearest, ties to the smallest (trace, sample); the trace ends at its sample nearest the
+/// partner's among those up to a point size of arc on. Bounding boxes of blocks of 8 samples
+/// only skip samples farther than the point size.
 void brute_force_merges(TraceResult& r, const std::vector<std::uint32_t>& which,
                         const std::vector<std::uint32_t>& indexed) {
   const double ps = r.parameters.point_size;
@@ -264,6 +265,7 @@ void brute_force_merges(TraceResult& r, const std::vector<std::uint32_t>& which,
   }
   std::vector<std::uint32_t> new_end(r.num_traces());
   std::vector<std::int64_t> partner(r.num_traces(), -1);
+  std::vector<Vec3d> partner_sample(r.num_traces());
   for (const std::uint32_t j : which) {
     for (std::uint32_t i = 0; i <= r.end[j] && partner[j] < 0; ++i) {
       const Vec3d& q = r.sample(j, i);
@@ -280,11 +282,20 @@ void brute_force_merges(TraceResult& r, const std::vector<std::uint32_t>& which,
           if (d < best) {
             best = d;
             partner[j] = b.trace;
+            partner_sample[j] = r.sample(b.trace, m);
             new_end[j] = i;
           }
         }
       }
     }
+    if (partner[j] < 0) continue;
+    const std::uint32_t i = new_end[j];
+    for (std::uint32_t m = i + 1;
+         m <= r.end[j] && r.arc_length[r.offsets[j] + m] - r.arc_length[r.offsets[j] + i] <= ps;
+         ++m)
+      if (distance(r.sample(j, m), partner_sample[j]) <
+          distance(r.sample(j, new_end[j]), partner_sample[j]))
+        new_end[j] = m;
   }
   for (const std::uint32_t j : which)
     if (partner[j] >= 0) {
