@@ -1,6 +1,6 @@
 // merges.h — order-independent merge resolution (criterion 1 of trace.h; paper eq. 3, Fig. 3).
 //
-// A trace ends at its first sample (by arc length) that lies within the point size of an
+// A trace merges at its first sample (by arc length) that lies within the point size of an
 // *eligible* sample of another trace, where
 //   * a sample is eligible unless it lies within the last two point sizes of its trace (traces
 //     arriving together at a critical point end there and are welded, they do not stop short);
@@ -9,10 +9,10 @@
 //     never merge (traces running the same way, not a junction);
 // and its partner is the nearest such sample, ties going to the smallest (trace, sample). The trace
 // then ends at its merge point: of its samples from that first one to one point size of arc
-// past it, the one nearest the partner's sample (the first of equals) — where it passes the
-// partner's path, not up to a point size short of it. Where traces cross a thin part from both
-// sides onto traces running along its medial surface, stopping short left a slab of the point
-// size uncovered between the two sides.
+// past it, the one nearest the partner's sample (the first of equals), where it passes the
+// partner's path. Ending at the first one instead would stop it up to a point size short: where
+// the traces of a thin part's two sides meet traces running along its medial surface, that
+// leaves a slab about the point size thick uncovered.
 //
 // The queries run against a grid of the eligible samples: cubic cells of side the point size
 // (larger only where the samples' extent would overflow 18 bits of cell index), each cell's
