@@ -190,34 +190,29 @@ double planned_voxel_size(const SurfaceMesh& mesh, const FieldOptions& options) 
                                 : bounding_box(mesh).max_side() / options.resolution;
 }
 
-void scale_points(std::vector<Vec3d>& points, double s) {
-  for (Vec3d& p : points) p *= s;
-}
-
-/// `options` with every length scaled by `s` (the dimensionless ones as they are).
-ShellOptions scaled_options(ShellOptions o, double s) {
-  o.fields.voxel_size *= s;
-  o.trace.step *= s;
-  o.trace.point_size *= s;
-  o.thickness.max_thickness *= s;
-  if (o.thickness.weld_tolerance > 0) o.thickness.weld_tolerance *= s;
-  o.repair_voxel_size *= s;
+/// `options` with every length scaled by 2^k (the dimensionless ones as they are; a negative
+/// weld tolerance, "the default", stays negative).
+ShellOptions scaled_options(ShellOptions o, int k) {
+  for (double* length :
+       {&o.fields.voxel_size, &o.trace.step, &o.trace.point_size, &o.thickness.max_thickness,
+        &o.thickness.weld_tolerance, &o.repair_voxel_size})
+    *length = std::ldexp(*length, k);
   return o;
 }
 
-/// Scales every length a result holds by `s`: the shell, the inner surface, the traces, the
+/// Scales every length a result holds by 2^k: the shell, the inner surface, the traces, the
 /// voxel size and the volumes. The surface and the options are the caller's to set.
-void scale_result(ShellResult& r, double s) {
-  scale_points(r.mesh.points, s);
-  for (double& t : r.mesh.thickness) t *= s;
-  scale_points(r.inner_surface.points, s);
-  scale_points(r.traces.samples, s);
-  for (double& a : r.traces.arc_length) a *= s;
-  r.traces.parameters.step *= s;
-  r.traces.parameters.point_size *= s;
-  r.field_stats.voxel_size *= s;
-  r.quality.shell_volume *= s * s * s;
-  r.quality.enclosed_volume *= s * s * s;
+void scale_result(ShellResult& r, int k) {
+  scale_by_power_of_two(r.mesh.points, k);
+  for (double& t : r.mesh.thickness) t = std::ldexp(t, k);
+  scale_by_power_of_two(r.inner_surface.points, k);
+  scale_by_power_of_two(r.traces.samples, k);
+  for (double& a : r.traces.arc_length) a = std::ldexp(a, k);
+  for (double* length :
+       {&r.traces.parameters.step, &r.traces.parameters.point_size, &r.field_stats.voxel_size})
+    *length = std::ldexp(*length, k);
+  r.quality.shell_volume = std::ldexp(r.quality.shell_volume, 3 * k);
+  r.quality.enclosed_volume = std::ldexp(r.quality.enclosed_volume, 3 * k);
 }
 
 ShellResult run(const LoadedSurface& surface, const ShellOptions& options,
@@ -458,14 +453,13 @@ LoadedSurface load_repaired_surface(const PolygonSoup& soup, const std::string& 
     rebuilt = repair_surface(soup, repair, source, report);
   } else {
     PolygonSoup scaled = soup;
-    scale_points(scaled.points, std::ldexp(1.0, k));
+    scale_by_power_of_two(scaled.points, k);
     repair.voxel_size = std::ldexp(repair.voxel_size, k);
     rebuilt = repair_surface(scaled, repair, source, report);
-    const double s = std::ldexp(1.0, -k);
-    scale_points(rebuilt.points, s);
+    scale_by_power_of_two(rebuilt.points, -k);
     for (double* length : {&report.voxel_size, &report.distance_max, &report.distance_mean,
                            &report.input_distance_max, &report.input_distance_mean})
-      *length *= s;
+      *length = std::ldexp(*length, -k);
   }
   try {
     LoadedSurface surface = make_surface(rebuilt, source + " (repaired)");
@@ -495,12 +489,11 @@ ShellResult build_shell(const LoadedSurface& surface, const ShellOptions& option
     throw InputError(surface.source + ": its voxel size " + text(h) + why + limit +
                      ": to keep or write the fields, give its coordinates in a " +
                      (k > 0 ? "smaller unit (e.g. millimetres instead of metres)" : "larger unit"));
-  const double scale = std::ldexp(1.0, k);
   LoadedSurface scaled = surface;
-  scale_points(scaled.mesh.points, scale);
-  ShellResult r = in_arena(options.threads,
-                           [&] { return run(scaled, scaled_options(options, scale), control); });
-  scale_result(r, 1.0 / scale);
+  scale_by_power_of_two(scaled.mesh.points, k);
+  ShellResult r =
+      in_arena(options.threads, [&] { return run(scaled, scaled_options(options, k), control); });
+  scale_result(r, -k);
   r.options = options;
   r.input = {surface.source, surface.stats, surface.flipped};
   r.surface = surface.mesh;

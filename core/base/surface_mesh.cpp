@@ -55,11 +55,8 @@ int unit_scale_exponent(const std::vector<Vec3d>& points) {
   return largest > 0.0 && std::isfinite(largest) ? -std::ilogb(largest) : 0;
 }
 
-std::vector<Vec3d> scaled_by_power_of_two(const std::vector<Vec3d>& points, int k) {
-  std::vector<Vec3d> out(points.size());
-  for (std::size_t i = 0; i < points.size(); ++i)
-    out[i] = {std::ldexp(points[i].x, k), std::ldexp(points[i].y, k), std::ldexp(points[i].z, k)};
-  return out;
+void scale_by_power_of_two(std::vector<Vec3d>& points, int k) {
+  for (Vec3d& p : points) p = {std::ldexp(p.x, k), std::ldexp(p.y, k), std::ldexp(p.z, k)};
 }
 
 }  // namespace vdb_shell

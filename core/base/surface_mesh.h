@@ -41,8 +41,8 @@ double mean_edge_length(const SurfaceMesh& mesh);
 /// both ways) so that squared lengths, areas and volumes neither overflow nor underflow,
 /// whatever the input's unit.
 int unit_scale_exponent(const std::vector<Vec3d>& points);
-/// `points` times 2^k, coordinate by coordinate (std::ldexp: exact unless it leaves the range of
-/// normal doubles).
-std::vector<Vec3d> scaled_by_power_of_two(const std::vector<Vec3d>& points, int k);
+/// Multiplies `points` by 2^k, coordinate by coordinate (std::ldexp: exact unless it leaves the
+/// range of normal doubles).
+void scale_by_power_of_two(std::vector<Vec3d>& points, int k);
 
 }  // namespace vdb_shell

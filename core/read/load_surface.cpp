@@ -106,11 +106,17 @@ std::vector<SoupTriangle> fan_triangulate(const PolygonSoup& soup) {
 /// The geometric checks read points(): the soup's points times 2^scale (unit_scale_exponent()),
 /// so that they hold for any unit; messages name the soup's own points.
 struct SoupFaces {
+  SoupFaces(const PolygonSoup& s, std::vector<SoupTriangle> t)
+      : soup(s), tris(std::move(t)), scale(unit_scale_exponent(s.points)) {
+    if (scale == 0) return;
+    scaled = s.points;
+    scale_by_power_of_two(scaled, scale);
+  }
+
   const PolygonSoup& soup;
   std::vector<SoupTriangle> tris;
-  int scale = unit_scale_exponent(soup.points);
-  std::vector<Vec3d> scaled =
-      scale == 0 ? std::vector<Vec3d>{} : scaled_by_power_of_two(soup.points, scale);
+  int scale;                  // points() = soup.points times 2^scale
+  std::vector<Vec3d> scaled;  // empty when scale is 0
 
   const std::vector<Vec3d>& points() const { return scale == 0 ? soup.points : scaled; }
   /// A point of points()' frame, named in the soup's.
@@ -127,6 +133,14 @@ struct SoupFaces {
            fmt_point(soup.points[a]) + "-" + fmt_point(soup.points[b]);
   }
 };
+
+/// `mesh` with its points times 2^k, k = unit_scale_exponent() of them (also returned in `k`).
+SurfaceMesh at_unit_scale(const SurfaceMesh& mesh, int& k) {
+  k = unit_scale_exponent(mesh.points);
+  SurfaceMesh unit = mesh;
+  scale_by_power_of_two(unit.points, k);
+  return unit;
+}
 
 /// Element-wise rules: finite coordinates, indices in range, at least three corners. Returns
 /// false when indices or coordinates are bad (nothing else is meaningful then).
@@ -323,8 +337,8 @@ SurfaceStats surface_stats(const SurfaceMesh& mesh) {
   s.faces = mesh.triangles.size();
   s.bbox = bounding_box(mesh);
   // Measured at unit scale: only a volume beyond the doubles' range is Inf (or 0).
-  const int k = unit_scale_exponent(mesh.points);
-  const SurfaceMesh unit{scaled_by_power_of_two(mesh.points, k), mesh.triangles};
+  int k = 0;
+  const SurfaceMesh unit = at_unit_scale(mesh, k);
   s.mean_edge_length = std::ldexp(mean_edge_length(unit), -k);
   s.enclosed_volume = std::ldexp(signed_volume(unit), -3 * k);
 
@@ -389,10 +403,8 @@ LoadedSurface make_surface(const PolygonSoup& soup, const std::string& source,
     out.mesh.triangles.push_back({remap[t.v[0]], remap[t.v[1]], remap[t.v[2]]});
 
   // The volume's sign at unit scale, where it neither overflows nor underflows.
-  const SurfaceMesh unit{
-      scaled_by_power_of_two(out.mesh.points, unit_scale_exponent(out.mesh.points)),
-      out.mesh.triangles};
-  if (signed_volume(unit) < 0.0) {
+  int k = 0;
+  if (signed_volume(at_unit_scale(out.mesh, k)) < 0.0) {
     for (Triangle& t : out.mesh.triangles) std::swap(t[1], t[2]);
     out.flipped = true;
     out.notices.push_back(
