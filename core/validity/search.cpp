@@ -293,6 +293,61 @@ class ShellSearch {
     return unwelded;
   }
 
+  /// Calls visit(tet) for the tets of prism `p` that settle_volumes() does not accept, in its
+  /// order, until visit returns true: with one layer (or a cap), those not positive or below
+  /// `min_quality`; with K layers, those not positive or below min_quality / K, then, the prism's
+  /// own 3 tets (split_prism() of its outer and inner triangles) below `min_quality`.
+  template <class Visit>
+  void for_each_unsettled_tet(const LocalPrism& p, double zero_volume_tolerance, double min_quality,
+                              const Visit& visit) const {
+    const bool whole = layers_ == 1 || p.cap;  // p.tets are the prism's own 3 tets
+    const double quality = whole ? min_quality : min_quality / layers_;
+    for (const Tet& t : p.tets) {
+      const std::array<Vec3d, 4> c = p.corners(t);
+      if ((tet_volume_class(c, zero_volume_tolerance) != TetVolume::kPositive ||
+           tet_quality(c[0], c[1], c[2], c[3]) < quality) &&
+          visit(t))
+        return;
+    }
+    if (whole || !(min_quality > 0)) return;
+    const std::uint32_t* inner = p.ids.data() + 3 * layers_;
+    const PrismTets own = split_prism({p.ids[0], p.ids[1], p.ids[2], inner[0], inner[1], inner[2]});
+    for (int i = 0; i < own.count; ++i) {
+      const std::array<Vec3d, 4> c = p.corners(own.tets[i]);
+      if (tet_quality(c[0], c[1], c[2], c[3]) < min_quality && visit(own.tets[i])) return;
+    }
+  }
+
+  /// Sends the raised vertices of the prisms in `queue`, and of those around every vertex sent
+  /// back on the way, back to `before` (their depth before the raise) while a tet of the prism
+  /// is one settle_volumes() does not accept. A vertex is raised while s.t[v] != before[v].
+  /// Ends with every prism either accepted or as it was before the raise. Local and serial.
+  void lower_raised(State& s, const std::vector<double>& before, std::vector<std::uint32_t> queue,
+                    double zero_volume_tolerance, double min_quality) const {
+    std::vector<char> queued(surface_.triangles.size(), 0);
+    for (std::uint32_t f : queue) queued[f] = 1;
+    LocalPrism p;
+    for (std::size_t head = 0; head < queue.size(); ++head) {
+      if ((head & 1023) == 1023) monitor_.alive();
+      const std::uint32_t f = queue[head];
+      queued[f] = 0;
+      prism(s, f, p);
+      bool unsettled = false;
+      for_each_unsettled_tet(p, zero_volume_tolerance, min_quality,
+                             [&](const Tet&) { return unsettled = true; });
+      if (!unsettled) continue;
+      for (const std::uint32_t v : surface_.triangles[f]) {
+        if (s.t[v] == before[v]) continue;
+        s.t[v] = before[v];
+        for (const std::uint32_t g : faces_[v])
+          if (!queued[g]) {
+            queued[g] = 1;
+            queue.push_back(g);
+          }
+      }
+    }
+  }
+
   /// Steps back, as a round does for an inverted or flat tet (its deepest movable inner corner),
   /// until every tet of the prisms in `queue`, and of the prisms around every vertex moved on
   /// the way, is positive with a quality of at least `min_quality`, or has all its inner
@@ -316,35 +371,18 @@ class ShellSearch {
     };
     std::size_t unwelded = 0;
     LocalPrism p;
-    // Steps back the deepest movable corner of the first of `tets` that is not positive (when
-    // `volumes`) or below `quality`; whether it did.
-    const auto step_first = [&](const Tet* tets, std::size_t count, bool volumes, double quality) {
-      for (std::size_t i = 0; i < count; ++i) {
-        const std::array<Vec3d, 4> c = p.corners(tets[i]);
-        if (!(volumes && tet_volume_class(c, zero_volume_tolerance) != TetVolume::kPositive) &&
-            !(tet_quality(c[0], c[1], c[2], c[3]) < quality))
-          continue;
-        const std::uint32_t v = deepest_corner(s, p, tets[i]);
-        if (v == UINT32_MAX) continue;  // at the floor: left to the checks
-        unwelded += step_back(s, v, shrink, moved);
-        return true;  // the prism is queued again
-      }
-      return false;
-    };
     for (std::size_t head = 0; head < queue.size(); ++head) {
       if ((head & 1023) == 1023) monitor_.alive();
       const std::uint32_t f = queue[head];
       queued[f] = 0;
       prism(s, f, p);
-      const bool whole = layers_ == 1 || p.cap;  // p.tets are the prism's own 3 tets
-      if (step_first(p.tets.data(), p.tets.size(), true,
-                     whole ? min_quality : min_quality / layers_) ||
-          whole || !(min_quality > 0))
-        continue;
-      const std::uint32_t* inner = p.ids.data() + 3 * layers_;
-      const PrismTets own =
-          split_prism({p.ids[0], p.ids[1], p.ids[2], inner[0], inner[1], inner[2]});
-      step_first(own.tets.data(), static_cast<std::size_t>(own.count), false, min_quality);
+      // The first offending tet with a movable corner steps back; the prism is queued again.
+      for_each_unsettled_tet(p, zero_volume_tolerance, min_quality, [&](const Tet& t) {
+        const std::uint32_t v = deepest_corner(s, p, t);
+        if (v == UINT32_MAX) return false;  // at the floor: left to the checks
+        unwelded += step_back(s, v, shrink, moved);
+        return true;
+      });
     }
     return unwelded;
   }
@@ -631,43 +669,74 @@ bool drop_floors(ShellSearch& search, State& s, const SurfaceMesh& surface, cons
   return dropped;
 }
 
-/// Gives depth back where the search took more than it needed: every vertex below its traced
-/// depth goes one step deeper (t / shrink) and the rounds run again from there, stepping back
-/// only what offends now; a vertex stepped back in a pass is not raised again. At most
-/// options.give_back passes; a pass that does not end valid is undone.
-template <class Rounds>
-void give_back(const ShellSearch& search, State& s, const ValidityOptions& options, ValidShell& out,
-               std::vector<char>& lowered, std::vector<std::uint32_t>& seeds,
-               const Rounds& search_rounds) {
+/// Once the shell is valid, ValidityOptions::give_back passes give depth back: pass k takes every
+/// vertex below its traced depth (welded ones aside) to t / shrink^(1 / 2^(k + 1)), at most its
+/// traced depth — half a step, then a quarter, ... Where that leaves a prism unsettled
+/// (ShellSearch::lower_raised()) or an element offending, the raised vertices of the prisms
+/// involved go back to their depth before the pass, never lower, and the check repeats until the
+/// shell is valid: at worst every raise is undone and the shell is the valid one the pass began
+/// with. `check` checks a mesh (the search's ShellChecker); `build` assembles `out` from `s`.
+template <class Build, class Check>
+void give_back(const ShellSearch& search, const SurfaceMesh& surface, State& s,
+               const ValidityOptions& options, double zero_volume_tolerance,
+               const IndexLists& members, ValidShell& out, std::vector<std::uint32_t>& seeds,
+               const Build& build, const Check& check) {
   const auto n = static_cast<std::uint32_t>(s.t.size());
-  std::vector<char> settled(n, 0);
-  std::vector<std::uint32_t> raised;
-  std::vector<double> raised_to(n, 0.0);
   for (int pass = 0; pass < options.give_back && out.checks.valid(); ++pass) {
-    const State before = s;
-    const ShellInput input = out.input;
-    std::fill(lowered.begin(), lowered.end(), 0);
-    raised.clear();
+    const double step = std::pow(options.shrink, 1.0 / double(2 << pass));  // 1/2, 1/4, ...
+    const std::vector<double> before = s.t;
+    std::vector<char> raised(n, 0);
+    bool any = false;
     for (std::uint32_t v = 0; v < n; ++v) {
       const double full = search.full()[v];
-      if (settled[v] || s.welded[v] || s.t[v] == 0 || !(s.t[v] < full * (1 - 1e-12))) continue;
-      s.t[v] = raised_to[v] = std::min(full, s.t[v] / options.shrink);
-      raised.push_back(v);
-      lowered[v] = 1;
+      if (s.welded[v] || s.t[v] == 0 || !(s.t[v] < full * (1 - 1e-12))) continue;
+      s.t[v] = std::min(full, s.t[v] / step);
+      raised[v] = 1;
+      any = true;
     }
-    if (raised.empty()) break;
-    search.faces_around(lowered, seeds);
-    search_rounds(false);
-    if (!out.checks.valid()) {  // not expected (the floors are unchanged): keep the last valid
-      s = before;
-      out.input = input;
-      out.stalled = false;
-      out.floor_valid = true;
-      out.checks = ShellCheckResult{};
-      break;
+    if (!any) break;
+    search.faces_around(raised, seeds);
+    search.lower_raised(s, before, seeds, zero_volume_tolerance, options.min_quality);
+    for (bool undone = false;;) {
+      build();
+      out.checks = check(out.shell.mesh);
+      if (out.checks.valid() || undone) break;
+      // The raised vertices of every prism with an offending tet, face or inner point go back.
+      const TetMesh& mesh = out.shell.mesh;
+      const PointSlots slot_of(surface, out.input, mesh);
+      std::vector<char> sent(n, 0);
+      bool moved = false;
+      const auto send_back = [&](std::uint32_t v) {
+        if (s.t[v] == before[v]) return;
+        s.t[v] = before[v];
+        sent[v] = 1;
+        moved = true;
+      };
+      const auto send_face = [&](std::uint32_t f) {
+        for (const std::uint32_t v : surface.triangles[f]) send_back(v);
+      };
+      const ShellCheckResult& c = out.checks;
+      for (const auto& pair : c.first_overlapping_pairs)
+        for (const std::uint32_t t : pair) send_face(mesh.source_triangle[t]);
+      for (const auto* list :
+           {&c.first_inverted_tets, &c.first_zero_volume_tets, &c.first_leaking_tets})
+        for (const std::uint32_t t : *list) send_face(mesh.source_triangle[t]);
+      for (const auto* list :
+           {&c.first_missing_triangles, &c.first_shared_triangles, &c.first_misoriented_triangles})
+        for (const std::uint32_t f : *list) send_face(f);
+      for (const std::uint32_t p : c.first_outside_vertices) {
+        const std::uint32_t slot = slot_of(p);
+        if (slot != UINT32_MAX)
+          for (const std::uint32_t v : members[slot]) send_back(v);
+      }
+      if (!moved) {  // nothing raised offends (not expected): undo the pass whole
+        s.t = before;
+        undone = true;
+        continue;
+      }
+      search.faces_around(sent, seeds);
+      search.lower_raised(s, before, seeds, zero_volume_tolerance, options.min_quality);
     }
-    for (const std::uint32_t v : raised)
-      if (s.t[v] < raised_to[v]) settled[v] = 1;
   }
 }
 
@@ -825,7 +894,13 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
     }
   };
   search_rounds(true);
-  give_back(search, s, options, out, lowered, seeds, search_rounds);
+  give_back(
+      search, surface, s, options, check_options.zero_volume_tolerance, members, out, seeds,
+      [&] {
+        out.input = search.build(s, members);
+        out.shell = assemble_shell(surface, out.input, no_quality);
+      },
+      check);
   // Inner vertices at one place but not one vertex step back (each along its own trace, apart;
   // below its floor when at it) and the rounds settle what that changed; a few passes at most,
   // each only lowering.

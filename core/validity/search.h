@@ -34,8 +34,9 @@
 // Vertices that were never involved keep their full depth: the shell stays as thick as the
 // traces allow wherever it is already valid; the gentle shrink, applied locally until each
 // offence is gone, takes little more than needed from those that were, and once the shell is
-// valid, ValidityOptions::give_back passes try every moved-back vertex one step deeper again
-// (the rounds step back what then offends; a pass that ends invalid is undone; docs/validity.md).
+// valid, a ValidityOptions::give_back pass tries every moved-back vertex half a step deeper
+// again: where that offends, the raised vertices involved go back to where they were, never
+// lower, until the shell is valid again (docs/validity.md).
 // Last, inner vertices within 1e-8 of the surface's diagonal of each other (traces that met at
 // one point and left their weld) step back apart, their floors dropped when at them, and the
 // rounds run again: readers that weld duplicate positions would see non-manifold faces.
@@ -64,9 +65,10 @@ struct ValidityOptions {
   double floor_drop = 0.25;      ///< factor on the floor of a vertex offending at its floor
   int max_floor_drops = 4;       ///< at most this many floor drops per vertex
   int max_rounds = 1000;         ///< safety net (rounds are cheap)
-  /// Passes giving depth back once the shell is valid: every vertex below its traced depth one
-  /// step deeper, the rounds again from there (0: none).
-  int give_back = 2;
+  /// Passes giving depth back once the shell is valid: every vertex below its traced depth half a
+  /// step deeper (t / shrink^(1/2)), then a quarter, ...; the raised vertices of what then
+  /// offends go back to where they were, never lower (0: none).
+  int give_back = 1;
   /// Layers through the thickness (--layers, --layer-ratio; AssembleOptions): the search checks
   /// the layered shell, so the shell it ends with is valid layer by layer.
   int layers = 1;

@@ -1,8 +1,8 @@
 // search_test.cpp — the validity guarantee of the shell (core/validity/search.h, through
 // build_shell()): every generated shape at two resolutions, adversarial shapes (thin plate, sharp
 // concave notch, long needle, two close components), identical output for 1 and 2 threads, the
-// coverage targets at 128^3, and the independent checker's verdict; every shell also checked by
-// test_support's own computations.
+// coverage targets at 128^3, giving depth back, and the independent checker's verdict; every
+// shell also checked by test_support's own computations.
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
@@ -68,11 +68,12 @@ struct ShellRun {
   ShellResult result;
 };
 
-ShellRun shell_of(const SurfaceMesh& mesh, const std::string& name, int resolution,
-                  int threads = 0) {
+ShellRun shell_of(const SurfaceMesh& mesh, const std::string& name, int resolution, int threads = 0,
+                  int give_back = ValidityOptions{}.give_back) {
   ShellOptions options;
   options.fields.resolution = resolution;
   options.threads = threads;
+  options.validity.give_back = give_back;
   ShellRun out;
   try {
     out.result = build_shell(mesh, options, {}, name);
@@ -164,6 +165,28 @@ TEST(Validity, SharedMeshesValidAndSameForOneAndTwoThreads) {
     EXPECT_FALSE(bytes[0].empty());
     EXPECT_TRUE(bytes[0] == bytes[1]) << name << ": output differs between 1 and 2 threads";
   }
+}
+
+TEST(Validity, GivingDepthBackKeepsTheShellValidAndThickensIt) {
+  // The passes that give depth back once the shell is valid (ValidityOptions::give_back) only
+  // deepen inner vertices, and undo what offends: the shell stays valid by the independent
+  // checks, and its independently computed volume grows.
+  std::vector<std::pair<std::string, SurfaceMesh>> inputs = {
+      {"star", make_shape("star", 1)}, {"propeller", make_shape("propeller", 1)}};
+  const auto meshes = test::shared_meshes_dir();
+  if (!meshes.empty())
+    for (const char* name : {"spot.obj", "fertility.off"})
+      inputs.emplace_back(name, load_surface((meshes / name).string()).mesh);
+  double gained = 0;
+  for (const auto& [name, mesh] : inputs) {
+    const ShellRun without = shell_of(mesh, name, 96, 0, 0);
+    const ShellRun with = shell_of(mesh, name, 96);
+    expect_valid(without, name + " without");
+    expect_valid(with, name);
+    EXPECT_GE(with.coverage, without.coverage - 1e-9) << name;
+    gained = std::max(gained, with.coverage - without.coverage);
+  }
+  EXPECT_GT(gained, 0.003);
 }
 
 TEST(Validity, CoverageTargetsAt128) {
