@@ -293,6 +293,31 @@ class ShellSearch {
     return unwelded;
   }
 
+  /// Works through the prisms in `queue` and those queued on the way: settle(p, again) for each,
+  /// `p` the prism in `s` as it is then, again(v) queuing the prisms around vertex v that are not
+  /// queued already.
+  template <class Settle>
+  void for_each_queued_prism(const State& s, std::vector<std::uint32_t> queue,
+                             const Settle& settle) const {
+    std::vector<char> queued(surface_.triangles.size(), 0);
+    for (std::uint32_t f : queue) queued[f] = 1;
+    const auto again = [&](std::uint32_t v) {
+      for (const std::uint32_t f : faces_[v])
+        if (!queued[f]) {
+          queued[f] = 1;
+          queue.push_back(f);
+        }
+    };
+    LocalPrism p;
+    for (std::size_t head = 0; head < queue.size(); ++head) {
+      if ((head & 1023) == 1023) monitor_.alive();
+      const std::uint32_t f = queue[head];
+      queued[f] = 0;
+      prism(s, f, p);
+      settle(p, again);
+    }
+  }
+
   /// Calls visit(tet) for the tets of prism `p` that settle_volumes() does not accept, in its
   /// order, until visit returns true: with one layer (or a cap), those not positive or below
   /// `min_quality`; with K layers, those not positive or below min_quality / K, then, the prism's
@@ -324,28 +349,17 @@ class ShellSearch {
   /// Ends with every prism either accepted or as it was before the raise. Local and serial.
   void lower_raised(State& s, const std::vector<double>& before, std::vector<std::uint32_t> queue,
                     double zero_volume_tolerance, double min_quality) const {
-    std::vector<char> queued(surface_.triangles.size(), 0);
-    for (std::uint32_t f : queue) queued[f] = 1;
-    LocalPrism p;
-    for (std::size_t head = 0; head < queue.size(); ++head) {
-      if ((head & 1023) == 1023) monitor_.alive();
-      const std::uint32_t f = queue[head];
-      queued[f] = 0;
-      prism(s, f, p);
+    for_each_queued_prism(s, std::move(queue), [&](const LocalPrism& p, const auto& again) {
       bool unsettled = false;
       for_each_unsettled_tet(p, zero_volume_tolerance, min_quality,
                              [&](const Tet&) { return unsettled = true; });
-      if (!unsettled) continue;
-      for (const std::uint32_t v : surface_.triangles[f]) {
+      if (!unsettled) return;
+      for (const std::uint32_t v : surface_.triangles[p.face]) {
         if (s.t[v] == before[v]) continue;
         s.t[v] = before[v];
-        for (const std::uint32_t g : faces_[v])
-          if (!queued[g]) {
-            queued[g] = 1;
-            queue.push_back(g);
-          }
+        again(v);
       }
-    }
+    });
   }
 
   /// Steps back, as a round does for an inverted or flat tet (its deepest movable inner corner),
@@ -359,31 +373,19 @@ class ShellSearch {
   std::size_t settle_volumes(State& s, std::vector<std::uint32_t> queue, double shrink,
                              double zero_volume_tolerance, double min_quality,
                              std::vector<char>& lowered) const {
-    std::vector<char> queued(surface_.triangles.size(), 0);
-    for (std::uint32_t f : queue) queued[f] = 1;
-    auto moved = [&](std::uint32_t v) {
-      lowered[v] = 1;
-      for (const std::uint32_t f : faces_[v])
-        if (!queued[f]) {
-          queued[f] = 1;
-          queue.push_back(f);
-        }
-    };
     std::size_t unwelded = 0;
-    LocalPrism p;
-    for (std::size_t head = 0; head < queue.size(); ++head) {
-      if ((head & 1023) == 1023) monitor_.alive();
-      const std::uint32_t f = queue[head];
-      queued[f] = 0;
-      prism(s, f, p);
+    for_each_queued_prism(s, std::move(queue), [&](const LocalPrism& p, const auto& again) {
       // The first offending tet with a movable corner steps back; the prism is queued again.
       for_each_unsettled_tet(p, zero_volume_tolerance, min_quality, [&](const Tet& t) {
         const std::uint32_t v = deepest_corner(s, p, t);
         if (v == UINT32_MAX) return false;  // at the floor: left to the checks
-        unwelded += step_back(s, v, shrink, moved);
+        unwelded += step_back(s, v, shrink, [&](std::uint32_t u) {
+          lowered[u] = 1;
+          again(u);
+        });
         return true;
       });
-    }
+    });
     return unwelded;
   }
 
