@@ -684,6 +684,7 @@ void give_back(const ShellSearch& search, const SurfaceMesh& surface, State& s,
                const IndexLists& members, ValidShell& out, std::vector<std::uint32_t>& seeds,
                const Build& build, const Check& check) {
   const auto n = static_cast<std::uint32_t>(s.t.size());
+  std::vector<std::uint32_t> bad_tets, bad_slots;
   for (int pass = 0; pass < options.give_back && out.checks.valid(); ++pass) {
     const double step = std::pow(options.shrink, 1.0 / double(2 << pass));  // 1/2, 1/4, ...
     const std::vector<double> before = s.t;
@@ -717,20 +718,12 @@ void give_back(const ShellSearch& search, const SurfaceMesh& surface, State& s,
       const auto send_face = [&](std::uint32_t f) {
         for (const std::uint32_t v : surface.triangles[f]) send_back(v);
       };
-      const ShellCheckResult& c = out.checks;
-      for (const auto& pair : c.first_overlapping_pairs)
+      collect_offenders(surface, out.input, slot_of, out.checks, bad_tets, bad_slots);
+      for (const auto& pair : out.checks.first_overlapping_pairs)
         for (const std::uint32_t t : pair) send_face(mesh.source_triangle[t]);
-      for (const auto* list :
-           {&c.first_inverted_tets, &c.first_zero_volume_tets, &c.first_leaking_tets})
-        for (const std::uint32_t t : *list) send_face(mesh.source_triangle[t]);
-      for (const auto* list :
-           {&c.first_missing_triangles, &c.first_shared_triangles, &c.first_misoriented_triangles})
-        for (const std::uint32_t f : *list) send_face(f);
-      for (const std::uint32_t p : c.first_outside_vertices) {
-        const std::uint32_t slot = slot_of(p);
-        if (slot != UINT32_MAX)
-          for (const std::uint32_t v : members[slot]) send_back(v);
-      }
+      for (const std::uint32_t t : bad_tets) send_face(mesh.source_triangle[t]);
+      for (const std::uint32_t slot : bad_slots)
+        for (const std::uint32_t v : members[slot]) send_back(v);
       if (!moved) {  // nothing raised offends (not expected): undo the pass whole
         s.t = before;
         undone = true;
