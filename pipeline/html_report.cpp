@@ -325,12 +325,13 @@ std::string report_html(const ShellResult& r, const ReportFiles& files, double r
                "none needed: the input is closed, 2-manifold and does not cross "
                "itself, kept as it is");
     else
-      h << row("repair", "rebuilt watertight through a volume (voxel " + num(p.voxel_size) +
-                             ", closing " + num(p.closing) +
-                             " voxels): " + count_of(p.input_faces) + " input polygons, " +
-                             count_of(p.holes_closed) + " holes closed, " + count_of(p.faces) +
-                             " faces; repaired to input distance max " + num(p.distance_max) +
-                             ", mean " + num(p.distance_mean));
+      h << row("repair",
+               "rebuilt watertight through a volume (voxel " + num(p.voxel_size) + ", closing " +
+                   num(p.closing) + " voxels): " + count_of(p.input_faces) + " input polygons, " +
+                   count_of(p.holes_closed) + " holes closed, " + count_of(p.faces) +
+                   " faces; repaired to input distance max " + num(p.distance_max) + ", mean " +
+                   num(p.distance_mean) + "; input to repaired max " + num(p.input_distance_max) +
+                   " (on the enclosed solid " + num(p.solid_input_distance_max) + ")");
   }
   std::string notices;
   for (const std::string& n : r.notices) notices += "<li>" + escape(n) + "</li>";

@@ -458,7 +458,8 @@ LoadedSurface load_repaired_surface(const PolygonSoup& soup, const std::string& 
     rebuilt = repair_surface(scaled, repair, source, report);
     scale_by_power_of_two(rebuilt.points, -k);
     for (double* length : {&report.voxel_size, &report.distance_max, &report.distance_mean,
-                           &report.input_distance_max, &report.input_distance_mean})
+                           &report.input_distance_max, &report.input_distance_mean,
+                           &report.solid_input_distance_max})
       *length = std::ldexp(*length, -k);
   }
   try {
@@ -648,6 +649,8 @@ std::string report_json(const ShellResult& r, const ReportFiles& files, double r
                    {"distance_mean", p.distance_mean},
                    {"input_distance_max", p.input_distance_max},
                    {"input_distance_mean", p.input_distance_mean},
+                   {"solid_input_distance_max", p.solid_input_distance_max},
+                   {"solid_input_points", p.solid_input_points},
                    {"seconds", p.seconds}};
     if (!p.grid.empty())
       j["repair"]["volume"] = {{"grid", p.grid},

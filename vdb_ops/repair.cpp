@@ -321,7 +321,6 @@ PolygonSoup repair_surface(const PolygonSoup& input, const RepairOptions& option
   for (std::size_t v = 0; v < to_core.size(); ++v)
     to_core[v] = to_outside[v] >= rv + 0.5f ? 0.0f : static_cast<float>(kFar);
   squared_distance_transform(dense, to_core, nearest);
-  std::vector<std::uint32_t>().swap(nearest);
   // The signed distance, world units, the surface at 0: the closed solid and the thin parts.
   std::vector<float> phi(dense.size());
   std::size_t inside = 0;
@@ -332,8 +331,16 @@ PolygonSoup repair_surface(const PolygonSoup& input, const RepairOptions& option
     inside += phi[v] < 0.0f;
   }
   std::vector<float>().swap(to_core);
-  std::vector<float>().swap(to_outside);
   std::vector<std::uint8_t>().swap(state);
+  // Squared voxels to the closed solid's voxels more than a voxel deep, for the report (input
+  // vertices within 4.5 voxels lie on the enclosed solid; an open sheet's slab has no such
+  // voxel: its own are at most rv + 0.87 from the outside).
+  std::vector<float> to_deep(dense.size());
+  for (std::size_t v = 0; v < dense.size(); ++v)
+    to_deep[v] = to_outside[v] >= rv + 1.0f ? 0.0f : static_cast<float>(kFar);
+  std::vector<float>().swap(to_outside);
+  squared_distance_transform(dense, to_deep, nearest);
+  std::vector<std::uint32_t>().swap(nearest);
   if (inside == 0)
     throw InputError(name + ": nothing solid is left after closing by " +
                      format_double(options.closing) +
@@ -413,8 +420,9 @@ PolygonSoup repair_surface(const PolygonSoup& input, const RepairOptions& option
     throw InputError(name + ": the repaired solid has no surface (nothing enclosed or thick)");
 
   // How far the repair strays: the repaired vertices' distance to the input, and the input
-  // vertices' distance to the repaired surface (except those swallowed inside the repaired
-  // solid, more than a voxel deep).
+  // vertices' distance to the repaired surface, except those swallowed: inside the repaired
+  // surface, more than a voxel from it, and on the enclosed solid (an overlapping part, a closed
+  // gap; a sheet inside its own slab counts).
   report = RepairReport{};
   report.voxel_size = h;
   report.closing = options.closing;
@@ -436,13 +444,34 @@ PolygonSoup repair_surface(const PolygonSoup& input, const RepairOptions& option
   }
   const MeshDistance to_repaired(repaired, *xform, band);
   const Sampler side{*sdf};
+  // Whether p lies on the enclosed solid: within 4.5 voxels of a voxel more than a voxel deep in
+  // it, through one of the 8 voxels around p (a box's corner is, its nearest such voxel at most
+  // sqrt(12) voxels away).
+  const auto on_solid = [&](const Vec3d& p) {
+    const openvdb::Vec3d ip = xform->worldToIndex(openvdb::Vec3d(p.x, p.y, p.z));
+    const openvdb::Coord base = openvdb::Coord::floor(ip);
+    for (int d = 0; d < 8; ++d) {
+      const openvdb::Coord c = base.offsetBy(d & 1, (d >> 1) & 1, d >> 2);
+      if (c.x() < 0 || c.y() < 0 || c.z() < 0 || c.x() >= dense.n[0] || c.y() >= dense.n[1] ||
+          c.z() >= dense.n[2])
+        continue;
+      if (std::sqrt(to_deep[dense.index(c.x(), c.y(), c.z())]) + (c.asVec3d() - ip).length() <= 4.5)
+        return true;
+    }
+    return false;
+  };
   std::size_t counted = 0;
   for (const Vec3d& p : input.points) {
-    if (!is_finite(p) || side.at(p) < -h) continue;  // swallowed
+    if (!is_finite(p)) continue;
     const double d = to_repaired.at(p);
+    const bool solid = on_solid(p);
+    if (d > h && solid && side.at(p) < 0.0) continue;  // swallowed
     report.input_distance_max = std::max(report.input_distance_max, d);
     report.input_distance_mean += d;
     ++counted;
+    if (!solid) continue;
+    report.solid_input_distance_max = std::max(report.solid_input_distance_max, d);
+    ++report.solid_input_points;
   }
   if (counted > 0) report.input_distance_mean /= static_cast<double>(counted);
   report.seconds = seconds_since(start);

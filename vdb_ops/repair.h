@@ -41,8 +41,15 @@ struct RepairReport {
   std::size_t holes_closed = 0;  ///< boundary loops of the input
   double distance_max = 0.0;     ///< repaired surface -> nearest input triangle
   double distance_mean = 0.0;
-  double input_distance_max = 0.0;  ///< input vertices not swallowed -> repaired surface
+  /// Input vertices -> repaired surface, except those swallowed: on the enclosed solid (below)
+  /// and inside the repaired surface more than a voxel from it (overlapping parts, closed gaps).
+  double input_distance_max = 0.0;
   double input_distance_mean = 0.0;
+  /// input_distance_max over the input vertices on the enclosed solid (within two voxels of a
+  /// voxel at least a voxel deep in what the input encloses, before thin parts are added): an
+  /// open sheet, kept as a slab with the sheet inside it, does not count.
+  double solid_input_distance_max = 0.0;
+  std::size_t solid_input_points = 0;  ///< the input vertices counted there
   double seconds = 0.0;
   /// A .vdb input (load_level_set_surface()): the grid meshed (empty for polygons), its class,
   /// the value meshed and whether its solid is where the values exceed it.

@@ -718,6 +718,9 @@ def test_repair_rebuilds_a_holed_sphere(sphere):
     repair = result.report["repair"]
     assert repair["holes_closed"] == 1 and repair["input_faces"] == len(holed)
     assert repair["distance_max"] < 4 * repair["voxel_size"]
+    # A closed solid but for the hole: every input vertex lies on the enclosed solid.
+    assert repair["solid_input_points"] == len(v)
+    assert repair["solid_input_distance_max"] == repair["input_distance_max"]
     assert np.all(tet_volumes(result.points, result.tets) > 0)
     assert result.report["input"]["faces"] == np.unique(result.source_triangle).size
     with pytest.raises(vdb_shell.InputError, match="repair"):

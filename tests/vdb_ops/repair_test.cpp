@@ -146,6 +146,7 @@ TEST(Repair, ATinyInputIsRepairedAsItselfScaledExactly) {
   EXPECT_EQ(r.report.voxel_size, big.report.voxel_size * s);
   EXPECT_EQ(r.report.distance_max, big.report.distance_max * s);
   EXPECT_EQ(r.report.input_distance_max, big.report.input_distance_max * s);
+  EXPECT_EQ(r.report.solid_input_distance_max, big.report.solid_input_distance_max * s);
   EXPECT_EQ(r.report.holes_closed, 1u);
   EXPECT_LT(max_distance(tiny.points, soup_of(r.surface.mesh)), 1.0 * r.h);
 }
@@ -185,6 +186,36 @@ TEST(Repair, AnOpenSheetBecomesAThinSlab) {
   for (const Vec3d& p : r.surface.mesh.points) lo = std::min(lo, p.z), hi = std::max(hi, p.z);
   EXPECT_GT(hi - lo, 0.5 * r.h);  // a solid, about the closing (2 voxels) thick
   EXPECT_LT(hi - lo, 4.0 * r.h);
+}
+
+TEST(Repair, TheSolidFiguresLeaveOutAnOpenSheet) {
+  // A closed box and, apart from it, an open sheet: the sheet becomes a slab with the sheet
+  // inside it, more than a voxel from the slab's faces, while the box is rebuilt within a voxel.
+  // The report's solid figures cover the box's vertices only; all figures agree with the brute
+  // force over each part's vertices.
+  const SurfaceMesh box = make_shape("box", 2);
+  PolygonSoup input = soup_of(box);
+  const std::size_t box_points = input.points.size();
+  const int n = 6;  // the sheet: n x n quads over [0.8, 1.6] x {0} x [-0.4, 0.4]
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i)
+      input.points.push_back({0.8 + 0.8 * i / n, 0.0, -0.4 + 0.8 * j / n});
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const std::int64_t a = std::int64_t(box_points) + j * (n + 1) + i;
+      input.polygons.push_back({a, a + 1, a + n + 2, a + n + 1});
+    }
+  const Repaired r = repair(input, 48);
+  const PolygonSoup repaired = soup_of(r.surface.mesh);
+  const std::vector<Vec3d> box_part(input.points.begin(), input.points.begin() + box_points),
+      sheet_part(input.points.begin() + box_points, input.points.end());
+  const double on_box = max_distance(box_part, repaired),
+               on_sheet = max_distance(sheet_part, repaired);
+  EXPECT_LT(on_box, 1.0 * r.h) << on_box / r.h << " voxels";
+  EXPECT_GT(on_sheet, 1.0 * r.h) << on_sheet / r.h << " voxels";
+  EXPECT_EQ(r.report.solid_input_points, box_points);
+  EXPECT_NEAR(r.report.solid_input_distance_max, on_box, 0.25 * r.h);
+  EXPECT_NEAR(r.report.input_distance_max, on_sheet, 0.25 * r.h);
 }
 
 TEST(Repair, NothingToRepairAndTooLargeAClosingAreBadInput) {
