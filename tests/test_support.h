@@ -3,8 +3,11 @@
 // without core/'s checks.
 #pragma once
 
+#include <array>
+#include <cstddef>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/base/surface_mesh.h"
@@ -82,5 +85,15 @@ double independent_quality(const TetMesh& mesh, const Tet& t);
 /// beside it), read by a parser of its own; 0- or 1-based, as the .node's first index says.
 /// \throw std::runtime_error when either file is missing or malformed.
 TetMesh read_tetgen_shell(const std::string& ele_path);
+
+/// Whether triangles t and u cross, computed here (none of core/'s tests): an edge of one through
+/// the other, or coplanar overlap. Shared vertices and edges do not count.
+bool triangles_intersect(const std::array<Vec3d, 3>& t, const std::array<Vec3d, 3>& u);
+
+/// Pairs of intersecting triangles of `mesh`, computed here (sweep and prune along x; pairs
+/// sharing an edge are checked for a fold-over instead, pairs sharing a vertex with the full
+/// test, which ignores contact at the shared vertex). Proper crossings only: a contact exactly
+/// along an edge or at a vertex, within 1e-10 relative, is not reported.
+std::vector<std::pair<std::size_t, std::size_t>> self_intersections(const SurfaceMesh& mesh);
 
 }  // namespace vdb_shell::test

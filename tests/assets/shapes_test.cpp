@@ -98,133 +98,6 @@ double triangle_area(const SurfaceMesh& mesh, std::size_t f) {
   return 0.5 * norm(face_normal_area(mesh, f));
 }
 
-// ---- triangle-triangle intersection ----------------------------------------------------------
-
-double orient3d(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
-  return dot(cross(b - a, c - a), d - a);
-}
-
-struct Vec2 {
-  double x, y;
-};
-
-double orient2d(const Vec2& a, const Vec2& b, const Vec2& c) {
-  return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
-}
-
-/// Coplanar triangles (2D, after projection): some pair of edges crosses properly or a vertex
-/// lies strictly inside the other triangle. Shared vertices and edges do not count.
-bool coplanar_overlap(const std::array<Vec2, 3>& p, const std::array<Vec2, 3>& q, double tol) {
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) {
-      const Vec2 &a = p[i], &b = p[(i + 1) % 3], &c = q[j], &d = q[(j + 1) % 3];
-      const double o1 = orient2d(a, b, c), o2 = orient2d(a, b, d);
-      const double o3 = orient2d(c, d, a), o4 = orient2d(c, d, b);
-      if (((o1 > tol && o2 < -tol) || (o1 < -tol && o2 > tol)) &&
-          ((o3 > tol && o4 < -tol) || (o3 < -tol && o4 > tol))) {
-        return true;
-      }
-    }
-  }
-  auto inside = [&](const Vec2& v, const std::array<Vec2, 3>& t) {
-    const double s0 = orient2d(t[0], t[1], v), s1 = orient2d(t[1], t[2], v);
-    const double s2 = orient2d(t[2], t[0], v);
-    return (s0 > tol && s1 > tol && s2 > tol) || (s0 < -tol && s1 < -tol && s2 < -tol);
-  };
-  for (int i = 0; i < 3; ++i) {
-    if (inside(p[i], q) || inside(q[i], p)) return true;
-  }
-  return false;
-}
-
-/// Some edge of `t` passes through the interior of `u` (touching counts; sharing does not).
-bool edge_pierces(const std::array<Vec3d, 3>& t, const std::array<Vec3d, 3>& u, double tol3) {
-  for (int i = 0; i < 3; ++i) {
-    const Vec3d &p = t[i], &q = t[(i + 1) % 3];
-    const double d1 = orient3d(u[0], u[1], u[2], p), d2 = orient3d(u[0], u[1], u[2], q);
-    if ((d1 > tol3 && d2 > tol3) || (d1 < -tol3 && d2 < -tol3)) continue;
-    if (std::fabs(d1) <= tol3 && std::fabs(d2) <= tol3) continue;  // in the plane: 2D test
-    const double s1 = orient3d(p, q, u[0], u[1]), s2 = orient3d(p, q, u[1], u[2]);
-    const double s3 = orient3d(p, q, u[2], u[0]);
-    if ((s1 > tol3 && s2 > tol3 && s3 > tol3) || (s1 < -tol3 && s2 < -tol3 && s3 < -tol3)) {
-      return true;
-    }
-  }
-  return false;
-}
-
-bool triangles_intersect(const std::array<Vec3d, 3>& t, const std::array<Vec3d, 3>& u) {
-  double longest = 0.0;
-  for (int i = 0; i < 3; ++i) {
-    longest = std::max({longest, norm(t[i] - t[(i + 1) % 3]), norm(u[i] - u[(i + 1) % 3])});
-  }
-  const double tol3 = 1e-10 * longest * longest * longest;
-  const double tol2 = 1e-10 * longest * longest;
-  bool coplanar = true;
-  for (int i = 0; i < 3; ++i) {
-    if (std::fabs(orient3d(u[0], u[1], u[2], t[i])) > tol3) coplanar = false;
-  }
-  if (coplanar) {
-    const Vec3d n = cross(u[1] - u[0], u[2] - u[0]);
-    const Vec3d an{std::fabs(n.x), std::fabs(n.y), std::fabs(n.z)};
-    const int drop = an.x >= an.y && an.x >= an.z ? 0 : (an.y >= an.z ? 1 : 2);
-    auto project = [&](const std::array<Vec3d, 3>& tri) {
-      std::array<Vec2, 3> out;
-      for (int i = 0; i < 3; ++i) {
-        const Vec3d& v = tri[i];
-        out[i] = drop == 0 ? Vec2{v.y, v.z} : (drop == 1 ? Vec2{v.z, v.x} : Vec2{v.x, v.y});
-      }
-      return out;
-    };
-    return coplanar_overlap(project(t), project(u), tol2);
-  }
-  return edge_pierces(t, u, tol3) || edge_pierces(u, t, tol3);
-}
-
-/// Pairs of intersecting triangles (sweep and prune along x; pairs sharing an edge are
-/// checked for a fold-over instead, pairs sharing a vertex with the full test, which ignores
-/// contact at the shared vertex). Proper crossings only: a contact exactly along an edge or at a
-/// vertex, within 1e-10 relative, is not reported.
-std::vector<std::pair<std::size_t, std::size_t>> self_intersections(const SurfaceMesh& mesh) {
-  const std::size_t nf = mesh.num_faces();
-  std::vector<BBox> boxes(nf);
-  std::vector<std::array<Vec3d, 3>> tris(nf);
-  for (std::size_t f = 0; f < nf; ++f) {
-    for (int k = 0; k < 3; ++k) {
-      tris[f][k] = mesh.points[mesh.triangles[f][k]];
-      boxes[f].expand(tris[f][k]);
-    }
-  }
-  std::vector<std::size_t> order(nf);
-  for (std::size_t f = 0; f < nf; ++f) order[f] = f;
-  std::sort(order.begin(), order.end(),
-            [&](std::size_t a, std::size_t b) { return boxes[a].lo.x < boxes[b].lo.x; });
-  const double pad = 1e-12;
-  std::vector<std::pair<std::size_t, std::size_t>> hits;
-  for (std::size_t i = 0; i < nf; ++i) {
-    const std::size_t f = order[i];
-    for (std::size_t k = i + 1; k < nf; ++k) {
-      const std::size_t g = order[k];
-      if (boxes[g].lo.x > boxes[f].hi.x + pad) break;
-      if (boxes[g].lo.y > boxes[f].hi.y + pad || boxes[f].lo.y > boxes[g].hi.y + pad ||
-          boxes[g].lo.z > boxes[f].hi.z + pad || boxes[f].lo.z > boxes[g].hi.z + pad) {
-        continue;
-      }
-      int shared = 0;
-      for (std::uint32_t a : mesh.triangles[f]) {
-        for (std::uint32_t b : mesh.triangles[g]) shared += a == b ? 1 : 0;
-      }
-      if (shared >= 2) {
-        const Vec3d nf_ = face_normal_area(mesh, f), ng = face_normal_area(mesh, g);
-        if (dot(nf_, ng) < -0.999 * norm(nf_) * norm(ng)) hits.emplace_back(f, g);
-        continue;
-      }
-      if (triangles_intersect(tris[f], tris[g])) hits.emplace_back(f, g);
-    }
-  }
-  return hits;
-}
-
 // The checks above must be able to fail.
 TEST(ShapesSelfCheck, IntersectionTestSeesCrossingsAndNotNeighbours) {
   const std::array<Vec3d, 3> flat = {Vec3d{0, 0, 0}, Vec3d{1, 0, 0}, Vec3d{0, 1, 0}};
@@ -234,10 +107,10 @@ TEST(ShapesSelfCheck, IntersectionTestSeesCrossingsAndNotNeighbours) {
   const std::array<Vec3d, 3> overlapping = {Vec3d{0.2, 0.2, 0}, Vec3d{1.2, 0.2, 0},
                                             Vec3d{0.2, 1.2, 0}};
   const std::array<Vec3d, 3> beside = {Vec3d{1, 1, 0}, Vec3d{2, 1, 0}, Vec3d{1, 2, 0}};
-  EXPECT_TRUE(triangles_intersect(flat, piercing));
-  EXPECT_FALSE(triangles_intersect(flat, above));
-  EXPECT_TRUE(triangles_intersect(flat, overlapping));
-  EXPECT_FALSE(triangles_intersect(flat, beside));
+  EXPECT_TRUE(test::triangles_intersect(flat, piercing));
+  EXPECT_FALSE(test::triangles_intersect(flat, above));
+  EXPECT_TRUE(test::triangles_intersect(flat, overlapping));
+  EXPECT_FALSE(test::triangles_intersect(flat, beside));
   // Two boxes overlapping in space, and one box with a face folded over its neighbour.
   SurfaceMesh two = make_shape("box");
   const SurfaceMesh other = make_shape("box");
@@ -247,13 +120,13 @@ TEST(ShapesSelfCheck, IntersectionTestSeesCrossingsAndNotNeighbours) {
     for (std::uint32_t& v : t) v += offset;
     two.triangles.push_back(t);
   }
-  EXPECT_FALSE(self_intersections(two).empty());
+  EXPECT_FALSE(test::self_intersections(two).empty());
   SurfaceMesh folded = make_shape("box", 2);
   const std::uint32_t corner = folded.triangles[5][1];
   // Push a vertex out through the opposite side, off the lattice (the test counts proper
   // crossings, not contacts exactly along edges).
   folded.points[corner] = folded.points[corner] * -1.5 + Vec3d{0.013, 0.029, 0.041};
-  EXPECT_FALSE(self_intersections(folded).empty());
+  EXPECT_FALSE(test::self_intersections(folded).empty());
 }
 
 TEST(ShapesSelfCheck, ValidatorSeesAFlippedTriangle) {
@@ -307,7 +180,7 @@ TEST_P(ShapesEveryShape, HasNoSelfIntersections) {
   for (int detail : {1, 2}) {
     SCOPED_TRACE(std::string(e.name) + " detail " + std::to_string(detail));
     const SurfaceMesh mesh = make_shape(e.name, detail);
-    const auto hits = self_intersections(mesh);
+    const auto hits = test::self_intersections(mesh);
     EXPECT_TRUE(hits.empty()) << hits.size() << " intersecting pairs, first: triangles "
                               << hits.front().first << " and " << hits.front().second;
   }
