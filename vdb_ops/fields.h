@@ -251,7 +251,8 @@ struct VolumeSurface {
 
 /// The surface of the grid `grid_name` of `vdb_path` as polygons (OpenVDB volumeToMesh).
 /// `adaptivity` in [0, 1]: 0 keeps every voxel-sized quad, larger values merge flat regions
-/// into fewer polygons. Pass the soup through make_surface() (load_surface.h).
+/// into fewer polygons; where merged polygons would cross or fold, they are meshed again without
+/// merging around the defect. Pass the soup through make_surface() (load_surface.h).
 /// Without `any_volume` (a .vdb input as it is): a float level set (empty name: 'surface', else
 /// the first), negative inside, meshed at its zero crossing. With `any_volume` (--repair): any
 /// float grid (empty name: as before, else the first fog volume, else the first float grid); a

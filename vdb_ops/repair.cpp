@@ -386,14 +386,11 @@ PolygonSoup repair_surface(const PolygonSoup& input, const RepairOptions& option
     return sdf;
   };
   // Meshed slightly off zero: whole-voxel distances put exact zeros on grid points, where the
-  // iso-surface would collapse triangles. Should the mesh still hold a defect (a zero-area
-  // triangle, two faces crossing), the next of a few nearby iso-values is tried, then the same
-  // at half, a quarter of the adaptivity and at 0 (adaptive polygons merged across a thin part
-  // can cross), and then all of it once the distance is smoothed.
-  std::vector<openvdb::Vec3s> points;
-  std::vector<openvdb::Vec3I> triangles;
-  std::vector<openvdb::Vec4I> quads;
-  PolygonSoup soup;
+  // iso-surface would collapse triangles. An adaptive mesh is mended around its defects first
+  // (mesh_volume()). Should the mesh still hold one (a zero-area triangle, two faces crossing),
+  // the next of a few nearby iso-values is tried, then the same at half, a quarter of the
+  // adaptivity and at 0, and then all of it once the distance is smoothed.
+  fields_detail::VolumeMesh meshed;
   FloatGrid::Ptr sdf;
   bool clean = false;
   std::vector<double> adaptivities = {options.adaptivity};
@@ -404,17 +401,14 @@ PolygonSoup repair_surface(const PolygonSoup& input, const RepairOptions& option
     sdf = to_grid();
     for (const double adaptivity : adaptivities) {
       for (const double iso : {1e-3, 0.0137, 0.0291, -0.0113, 0.0457}) {
-        points.clear();
-        triangles.clear();
-        quads.clear();
-        openvdb::tools::volumeToMesh(*sdf, points, triangles, quads, iso * h, adaptivity);
-        soup = fields_detail::reversed_polygons(points, triangles, quads);  // facing outward
-        clean = find_surface_problems(soup).empty();
+        meshed = fields_detail::mesh_volume(*sdf, iso * h, adaptivity);  // facing outward
+        clean = find_surface_problems(meshed.soup).empty();
         if (clean) break;
       }
       if (clean) break;
     }
   }
+  const PolygonSoup& soup = meshed.soup;
   std::vector<float>().swap(phi);
   if (soup.polygons.empty())
     throw InputError(name + ": the repaired solid has no surface (nothing enclosed or thick)");
@@ -437,8 +431,8 @@ PolygonSoup repair_surface(const PolygonSoup& input, const RepairOptions& option
   IndexMesh repaired;
   for (const Vec3d& p : soup.points)
     repaired.points.emplace_back(xform->worldToIndex(openvdb::Vec3d(p.x, p.y, p.z)));
-  for (const openvdb::Vec3I& t : triangles) repaired.triangles.push_back(t);
-  for (const openvdb::Vec4I& q : quads) {
+  for (const openvdb::Vec3I& t : meshed.triangles) repaired.triangles.push_back(t);
+  for (const openvdb::Vec4I& q : meshed.quads) {
     repaired.triangles.emplace_back(q[0], q[1], q[2]);
     repaired.triangles.emplace_back(q[0], q[2], q[3]);
   }

@@ -10,9 +10,10 @@
 // outside, from a Euclidean distance transform that knows each outside voxel's own distance to
 // the band), thin parts the erosion would remove (an open sheet) are kept as slabs about
 // `closing` voxels thick, and the distance is meshed with volumeToMesh (at an iso-value just off
-// zero; should the mesh have a defect, at a nearby one, at a lower adaptivity, then all of that
-// after smoothing the distance once). So the repaired surface follows a closed input within
-// about a fifth of a voxel and spans a hole with a smooth cap.
+// zero, an adaptive mesh mended around its defects; should the mesh still have one, at a nearby
+// iso-value, at a lower adaptivity, then all of that after smoothing the distance once). So the
+// repaired surface follows a closed input within about a fifth of a voxel and spans a hole with
+// a smooth cap.
 #pragma once
 
 #include <cstddef>

@@ -596,8 +596,9 @@ TEST(Pipeline, FoldedVertexGetsOneThickInnerVertexPerSector) {
 TEST(Pipeline, FoldedVerticesOfAnAdaptiveLevelSetGetSectors) {
   // fandisk's level set meshed adaptively (10,188 faces at 0.3, closed, no self-intersection)
   // has a vertex whose incident faces leave no inward direction with a margin: it is split into
-  // sectors and the shell is valid. At 0.6 the adaptive mesh intersects itself next to its folds
-  // (as `tetgen -d` confirms): refused when it is read, naming two crossing faces and a point.
+  // sectors and the shell is valid. At 0.6 OpenVDB's adaptive mesh crosses itself next to its
+  // folds (as `tetgen -d` confirms); it is meshed again without merging around the crossings:
+  // closed, crossing nowhere (counted here), still coarser than at 0.3, and its shell valid.
   const auto meshes = test::shared_meshes_dir();
   if (meshes.empty()) GTEST_SKIP() << "../shared/meshes is absent";
   TempDir dir;
@@ -614,14 +615,12 @@ TEST(Pipeline, FoldedVerticesOfAnAdaptiveLevelSetGetSectors) {
   EXPECT_GT(test::independent_coverage(r.surface, r.mesh), 0.75);
 
   adaptive.adaptivity = 0.6;
-  try {
-    load_level_set_surface(dir.file("f.vdb"), adaptive);
-    ADD_FAILURE() << "no InputError";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("self-intersections"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find(" cross at ("), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("--adaptivity"), std::string::npos) << e.what();
-  }
+  const ShellResult mended = build_shell_from_level_set(dir.file("f.vdb"), adaptive);
+  EXPECT_TRUE(test::self_intersections(mended.surface).empty());
+  EXPECT_LT(mended.surface.triangles.size(), r.surface.triangles.size());
+  EXPECT_EQ(
+      test::independent_shell_problems(mended.surface, mended.mesh, 2 * mended.validity.sectors),
+      "");
 }
 
 TEST(Pipeline, SharedMeshesRunEndToEnd) {

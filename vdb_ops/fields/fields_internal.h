@@ -160,11 +160,22 @@ using GridSelector = std::function<std::string(const openvdb::GridPtrVec& metas)
 ///        ResourceError if the child cannot be started.
 openvdb::GridPtrVecPtr read_vdb_isolated(const std::string& path, const GridSelector& select);
 
-/// volumeToMesh's output (index lists into `points`) as polygons facing the other way: out of
-/// the region below the iso-value for a level set, out of the one above it for any other class.
-PolygonSoup reversed_polygons(const std::vector<openvdb::Vec3s>& points,
-                              const std::vector<openvdb::Vec3I>& triangles,
-                              const std::vector<openvdb::Vec4I>& quads);
+/// What mesh_volume() made: volumeToMesh's output (index lists into `points`) and the same as
+/// polygons facing the other way (out of the region below the iso-value for a level set, out of
+/// the one above it for any other class).
+struct VolumeMesh {
+  std::vector<openvdb::Vec3s> points;
+  std::vector<openvdb::Vec3I> triangles;
+  std::vector<openvdb::Vec4I> quads;
+  PolygonSoup soup;
+};
+
+/// volumeToMesh of `grid` at `isovalue` (its values' units) and `adaptivity`. An adaptive mesh
+/// with zero-area triangles, crossing faces or faces folded back across an edge (polygons merged
+/// across a thin part or a fold) is meshed again with merging turned off around them (OpenVDB's
+/// adaptivity mask: 2, then 4, then 8 voxels around each of their corners), so the rest keeps its
+/// large polygons; what is left after three such rounds is the caller's to judge.
+VolumeMesh mesh_volume(const FloatGrid& grid, double isovalue, double adaptivity);
 
 /// Which grids read_float_grid() takes.
 enum class GridKinds {

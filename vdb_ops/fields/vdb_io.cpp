@@ -18,9 +18,13 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <map>
+#include <memory>
 #include <sstream>
 
 #include "core/base/errors.h"
+#include "core/read/load_surface.h"
+#include "core/validity/shell_checks.h"
 #include "core/write/atomic_file.h"
 #include "vdb_ops/trace_points_grid.h"
 
@@ -345,16 +349,82 @@ void require_readable(const std::string& path) {
   }
 }
 
-PolygonSoup reversed_polygons(const std::vector<openvdb::Vec3s>& points,
-                              const std::vector<openvdb::Vec3I>& triangles,
-                              const std::vector<openvdb::Vec4I>& quads) {
-  PolygonSoup soup;
-  soup.points.reserve(points.size());
-  for (const openvdb::Vec3s& p : points) soup.points.push_back({p[0], p[1], p[2]});
-  soup.polygons.reserve(triangles.size() + quads.size());
-  for (const openvdb::Vec3I& t : triangles) soup.polygons.push_back({t[2], t[1], t[0]});
-  for (const openvdb::Vec4I& q : quads) soup.polygons.push_back({q[3], q[2], q[1], q[0]});
-  return soup;
+VolumeMesh mesh_volume(const FloatGrid& grid, double isovalue, double adaptivity) {
+  VolumeMesh out;
+  const auto mesh = [&](const openvdb::BoolTree::Ptr& mask) {
+    openvdb::tools::VolumeToMesh mesher(isovalue, adaptivity);
+    if (mask) mesher.setAdaptivityMask(mask);
+    mesher(grid);
+    out.points.assign(mesher.pointList().get(), mesher.pointList().get() + mesher.pointListSize());
+    out.triangles.clear();
+    out.quads.clear();
+    for (std::size_t n = 0; n < mesher.polygonPoolListSize(); ++n) {
+      const openvdb::tools::PolygonPool& pool = mesher.polygonPoolList()[n];
+      for (std::size_t i = 0; i < pool.numQuads(); ++i) out.quads.push_back(pool.quad(i));
+      for (std::size_t i = 0; i < pool.numTriangles(); ++i)
+        out.triangles.push_back(pool.triangle(i));
+    }
+    PolygonSoup& soup = out.soup;
+    soup = PolygonSoup{};
+    soup.points.reserve(out.points.size());
+    for (const openvdb::Vec3s& p : out.points) soup.points.push_back({p[0], p[1], p[2]});
+    soup.polygons.reserve(out.triangles.size() + out.quads.size());
+    for (const openvdb::Vec3I& t : out.triangles) soup.polygons.push_back({t[2], t[1], t[0]});
+    for (const openvdb::Vec4I& q : out.quads) soup.polygons.push_back({q[3], q[2], q[1], q[0]});
+  };
+  // The corners of the zero-area triangles and crossing pairs, by find_surface_problems()'s
+  // rules, and of the pairs of faces folded onto each other across an edge (their normals
+  // within 2.6 degrees of opposite: a sliver folded back), in index space (voxels are units).
+  const auto defects = [&] {
+    SurfaceMesh m;
+    for (const openvdb::Vec3s& p : out.points) {
+      const openvdb::Vec3d c = grid.worldToIndex(p);
+      m.points.push_back({c[0], c[1], c[2]});
+    }
+    for (const auto& f : out.soup.polygons)
+      for (std::size_t k = 1; k + 1 < f.size(); ++k)
+        m.triangles.push_back({std::uint32_t(f[0]), std::uint32_t(f[k]), std::uint32_t(f[k + 1])});
+    const double diag = bounding_box(m).diagonal();
+    const double min_twice_area = 2.0 * ValidationOptions{}.degenerate_area_fraction * diag * diag;
+    std::vector<Vec3d> at;
+    const auto add = [&](std::uint32_t t) {
+      for (const std::uint32_t v : m.triangles[t]) at.push_back(m.points[v]);
+    };
+    for (std::uint32_t t = 0; t < m.triangles.size(); ++t) {
+      const Triangle& v = m.triangles[t];
+      if (norm(cross(m.points[v[1]] - m.points[v[0]], m.points[v[2]] - m.points[v[0]])) <=
+          min_twice_area)
+        add(t);
+    }
+    for (const auto& [f, g] : surface_self_intersections(m, SIZE_MAX)) add(f), add(g);
+    std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> first_face;
+    for (std::uint32_t t = 0; t < m.triangles.size(); ++t)
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t a = m.triangles[t][k], b = m.triangles[t][(k + 1) % 3];
+        const auto [it, fresh] = first_face.try_emplace({std::min(a, b), std::max(a, b)}, t);
+        if (fresh) continue;
+        const Vec3d n = face_normal_area(m, t), o = face_normal_area(m, it->second);
+        if (dot(n, o) < -0.999 * norm(n) * norm(o)) add(t), add(it->second);
+      }
+    return at;
+  };
+  openvdb::BoolTree::Ptr mask;
+  mesh(mask);
+  for (int round = 1; round <= 3 && adaptivity > 0; ++round) {
+    const std::vector<Vec3d> at = defects();
+    if (at.empty()) break;
+    if (!mask) mask = std::make_shared<openvdb::BoolTree>(false);
+    openvdb::tree::ValueAccessor<openvdb::BoolTree> on(*mask);
+    const int reach = 1 << round;
+    for (const Vec3d& p : at) {
+      const openvdb::Coord c = openvdb::Coord::round(openvdb::Vec3d(p.x, p.y, p.z));
+      for (int k = -reach; k <= reach; ++k)
+        for (int j = -reach; j <= reach; ++j)
+          for (int i = -reach; i <= reach; ++i) on.setValueOn(c.offsetBy(i, j, k));
+    }
+    mesh(mask);
+  }
+  return out;
 }
 
 FloatGrid::Ptr read_float_grid(const std::string& vdb_path, const std::string& grid_name,
@@ -445,11 +515,7 @@ VolumeSurface volume_to_soup(const std::string& vdb_path, const std::string& gri
       densities = *it >= 0.0f && *it <= 1.0f;
   }
   out.isovalue = densities ? 0.5 : 0.0;
-  std::vector<openvdb::Vec3s> points;
-  std::vector<openvdb::Vec3I> triangles;
-  std::vector<openvdb::Vec4I> quads;
-  openvdb::tools::volumeToMesh(*grid, points, triangles, quads, out.isovalue, adaptivity);
-  out.soup = reversed_polygons(points, triangles, quads);
+  out.soup = mesh_volume(*grid, out.isovalue, adaptivity).soup;
   PolygonSoup& soup = out.soup;
   if (soup.polygons.empty()) {
     throw InputError(out.where + " has no crossing of " + format_double(out.isovalue) +
