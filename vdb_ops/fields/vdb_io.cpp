@@ -375,28 +375,35 @@ VolumeMesh mesh_volume(const FloatGrid& grid, double isovalue, double adaptivity
   // The corners of the zero-area triangles and crossing pairs, by find_surface_problems()'s
   // rules, and of the pairs of faces folded onto each other across an edge (their normals
   // within 2.6 degrees of opposite: a sliver folded back), in index space (voxels are units).
+  // None for a mesh with a point that is not finite (a grid holding NaNs) or no extent at all:
+  // make_surface() says what is wrong with those.
   const auto defects = [&] {
-    SurfaceMesh m;
+    SurfaceMesh m, sound;  // sound: the triangles with an area, for the crossing test
+    std::vector<Vec3d> at;
     for (const openvdb::Vec3s& p : out.points) {
       const openvdb::Vec3d c = grid.worldToIndex(p);
       m.points.push_back({c[0], c[1], c[2]});
+      if (!is_finite(m.points.back())) return at;
     }
     for (const auto& f : out.soup.polygons)
       for (std::size_t k = 1; k + 1 < f.size(); ++k)
         m.triangles.push_back({std::uint32_t(f[0]), std::uint32_t(f[k]), std::uint32_t(f[k + 1])});
     const double diag = bounding_box(m).diagonal();
+    if (!(diag > 0)) return at;
     const double min_twice_area = 2.0 * ValidationOptions{}.degenerate_area_fraction * diag * diag;
-    std::vector<Vec3d> at;
-    const auto add = [&](std::uint32_t t) {
-      for (const std::uint32_t v : m.triangles[t]) at.push_back(m.points[v]);
+    const auto add = [&](const Triangle& t) {
+      for (const std::uint32_t v : t) at.push_back(m.points[v]);
     };
-    for (std::uint32_t t = 0; t < m.triangles.size(); ++t) {
-      const Triangle& v = m.triangles[t];
-      if (norm(cross(m.points[v[1]] - m.points[v[0]], m.points[v[2]] - m.points[v[0]])) <=
+    sound.points = m.points;
+    for (const Triangle& t : m.triangles) {
+      if (norm(cross(m.points[t[1]] - m.points[t[0]], m.points[t[2]] - m.points[t[0]])) >
           min_twice_area)
+        sound.triangles.push_back(t);
+      else
         add(t);
     }
-    for (const auto& [f, g] : surface_self_intersections(m, SIZE_MAX)) add(f), add(g);
+    for (const auto& [f, g] : surface_self_intersections(sound, SIZE_MAX))
+      add(sound.triangles[f]), add(sound.triangles[g]);
     std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> first_face;
     for (std::uint32_t t = 0; t < m.triangles.size(); ++t)
       for (int k = 0; k < 3; ++k) {
@@ -404,7 +411,8 @@ VolumeMesh mesh_volume(const FloatGrid& grid, double isovalue, double adaptivity
         const auto [it, fresh] = first_face.try_emplace({std::min(a, b), std::max(a, b)}, t);
         if (fresh) continue;
         const Vec3d n = face_normal_area(m, t), o = face_normal_area(m, it->second);
-        if (dot(n, o) < -0.999 * norm(n) * norm(o)) add(t), add(it->second);
+        if (dot(n, o) < -0.999 * norm(n) * norm(o))
+          add(m.triangles[t]), add(m.triangles[it->second]);
       }
     return at;
   };
