@@ -332,10 +332,6 @@ TetMesh read_tetgen_shell(const std::string& ele_path) {
 
 namespace {
 
-double orient3d(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
-  return dot(cross(b - a, c - a), d - a);
-}
-
 struct Vec2 {
   double x, y;
 };
@@ -373,11 +369,11 @@ bool coplanar_overlap(const std::array<Vec2, 3>& p, const std::array<Vec2, 3>& q
 bool edge_pierces(const std::array<Vec3d, 3>& t, const std::array<Vec3d, 3>& u, double tol3) {
   for (int i = 0; i < 3; ++i) {
     const Vec3d &p = t[i], &q = t[(i + 1) % 3];
-    const double d1 = orient3d(u[0], u[1], u[2], p), d2 = orient3d(u[0], u[1], u[2], q);
+    const double d1 = signed_volume6(u[0], u[1], u[2], p), d2 = signed_volume6(u[0], u[1], u[2], q);
     if ((d1 > tol3 && d2 > tol3) || (d1 < -tol3 && d2 < -tol3)) continue;
     if (std::fabs(d1) <= tol3 && std::fabs(d2) <= tol3) continue;  // in the plane: 2D test
-    const double s1 = orient3d(p, q, u[0], u[1]), s2 = orient3d(p, q, u[1], u[2]);
-    const double s3 = orient3d(p, q, u[2], u[0]);
+    const double s1 = signed_volume6(p, q, u[0], u[1]), s2 = signed_volume6(p, q, u[1], u[2]);
+    const double s3 = signed_volume6(p, q, u[2], u[0]);
     if ((s1 > tol3 && s2 > tol3 && s3 > tol3) || (s1 < -tol3 && s2 < -tol3 && s3 < -tol3)) {
       return true;
     }
@@ -396,7 +392,7 @@ bool triangles_intersect(const std::array<Vec3d, 3>& t, const std::array<Vec3d, 
   const double tol2 = 1e-10 * longest * longest;
   bool coplanar = true;
   for (int i = 0; i < 3; ++i) {
-    if (std::fabs(orient3d(u[0], u[1], u[2], t[i])) > tol3) coplanar = false;
+    if (std::fabs(signed_volume6(u[0], u[1], u[2], t[i])) > tol3) coplanar = false;
   }
   if (coplanar) {
     const Vec3d n = cross(u[1] - u[0], u[2] - u[0]);

@@ -408,7 +408,7 @@ PolygonSoup repair_surface(const PolygonSoup& input, const RepairOptions& option
       if (clean) break;
     }
   }
-  const PolygonSoup& soup = meshed.soup;
+  PolygonSoup soup = std::move(meshed.soup);
   std::vector<float>().swap(phi);
   if (soup.polygons.empty())
     throw InputError(name + ": the repaired solid has no surface (nothing enclosed or thick)");

@@ -46,8 +46,8 @@ struct RepairReport {
   /// and inside the repaired surface more than a voxel from it (overlapping parts, closed gaps).
   double input_distance_max = 0.0;
   double input_distance_mean = 0.0;
-  /// input_distance_max over the input vertices on the enclosed solid (within two voxels of a
-  /// voxel at least a voxel deep in what the input encloses, before thin parts are added): an
+  /// input_distance_max over the input vertices on the enclosed solid (within 4.5 voxels of a
+  /// voxel more than a voxel deep in what the input encloses, before thin parts are added): an
   /// open sheet, kept as a slab with the sheet inside it, does not count.
   double solid_input_distance_max = 0.0;
   std::size_t solid_input_points = 0;  ///< the input vertices counted there

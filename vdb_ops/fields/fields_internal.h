@@ -160,11 +160,10 @@ using GridSelector = std::function<std::string(const openvdb::GridPtrVec& metas)
 ///        ResourceError if the child cannot be started.
 openvdb::GridPtrVecPtr read_vdb_isolated(const std::string& path, const GridSelector& select);
 
-/// What mesh_volume() made: volumeToMesh's output (index lists into `points`) and the same as
-/// polygons facing the other way (out of the region below the iso-value for a level set, out of
-/// the one above it for any other class).
+/// What mesh_volume() made: volumeToMesh's polygons (index lists into soup.points) and the same
+/// as polygons facing the other way (out of the region below the iso-value for a level set, out
+/// of the one above it for any other class).
 struct VolumeMesh {
-  std::vector<openvdb::Vec3s> points;
   std::vector<openvdb::Vec3I> triangles;
   std::vector<openvdb::Vec4I> quads;
   PolygonSoup soup;

@@ -355,7 +355,6 @@ VolumeMesh mesh_volume(const FloatGrid& grid, double isovalue, double adaptivity
     openvdb::tools::VolumeToMesh mesher(isovalue, adaptivity);
     if (mask) mesher.setAdaptivityMask(mask);
     mesher(grid);
-    out.points.assign(mesher.pointList().get(), mesher.pointList().get() + mesher.pointListSize());
     out.triangles.clear();
     out.quads.clear();
     for (std::size_t n = 0; n < mesher.polygonPoolListSize(); ++n) {
@@ -366,8 +365,11 @@ VolumeMesh mesh_volume(const FloatGrid& grid, double isovalue, double adaptivity
     }
     PolygonSoup& soup = out.soup;
     soup = PolygonSoup{};
-    soup.points.reserve(out.points.size());
-    for (const openvdb::Vec3s& p : out.points) soup.points.push_back({p[0], p[1], p[2]});
+    soup.points.reserve(mesher.pointListSize());
+    for (std::size_t i = 0; i < mesher.pointListSize(); ++i) {
+      const openvdb::Vec3s& p = mesher.pointList()[i];
+      soup.points.push_back({p[0], p[1], p[2]});
+    }
     soup.polygons.reserve(out.triangles.size() + out.quads.size());
     for (const openvdb::Vec3I& t : out.triangles) soup.polygons.push_back({t[2], t[1], t[0]});
     for (const openvdb::Vec4I& q : out.quads) soup.polygons.push_back({q[3], q[2], q[1], q[0]});
@@ -380,8 +382,8 @@ VolumeMesh mesh_volume(const FloatGrid& grid, double isovalue, double adaptivity
   const auto defects = [&] {
     SurfaceMesh m, sound;  // sound: the triangles with an area, for the crossing test
     std::vector<Vec3d> at;
-    for (const openvdb::Vec3s& p : out.points) {
-      const openvdb::Vec3d c = grid.worldToIndex(p);
+    for (const Vec3d& p : out.soup.points) {
+      const openvdb::Vec3d c = grid.worldToIndex(openvdb::Vec3d(p.x, p.y, p.z));
       m.points.push_back({c[0], c[1], c[2]});
       if (!is_finite(m.points.back())) return at;
     }
