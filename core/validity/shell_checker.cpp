@@ -3,7 +3,8 @@
 //
 // One BroadPhase (tet_grid.h) over the surface's box, grown to hold the first shell, is built at
 // the first call, with the surface triangles entered once and tet k of prism f entered under the
-// key P f + k, P = 3 * ShellCheckOptions::layers the most tets of a prism. A call moves the tets of
+// key P f + k, P = 3 * ShellCheckOptions::layers the most tets of a prism (a prism is one group of
+// the phase). A call moves the tets of
 // the prisms that changed and runs the narrow phase (tet_intersections.h) for the "dirty" prisms —
 // changed since the previous call, or offending in it — only; every other pair is trusted: both its
 // tets are where they were when the pair was last tested, and it passed. The element checks are
@@ -196,7 +197,7 @@ void ShellChecker::Impl::build_phase(const MovedPrisms& all) {
   box.expand(box.lo - Vec3d{margin, margin, margin});
   box.expand(box.hi + Vec3d{margin, margin, margin});
   phase = std::make_unique<BroadPhase>(surface, box, grid_cell_size(by_key, box), std::move(by_key),
-                                       options.check_leaks);
+                                       options.check_leaks, P);
   phase->insert(keys);
 }
 

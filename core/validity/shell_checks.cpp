@@ -38,34 +38,54 @@ void check_inner_points(const TetMesh& mesh, const std::vector<std::uint32_t>& i
 }
 
 // Tet-tet overlaps and leaks of the tets `queries` (mesh indices): the tets `tets` (mesh
-// indices, ascending, the queries among them) in one BroadPhase over their bounding box, keyed by
-// their position in `tets`; the queries go to the narrow phase, against each other and the rest.
+// indices, ascending, the queries among them) in one BroadPhase over their bounding box; the
+// queries go to the narrow phase, against each other and the rest. Consecutive tets of `tets` with
+// one source triangle (the tets of a prism) share a group of the phase, up to 3 * options.layers
+// of them; without source triangles each tet is a group.
 void check_intersections(const SurfaceMesh& surface, const TetMesh& mesh,
                          const std::vector<std::uint32_t>& tets,
                          const std::vector<std::uint32_t>& queries, const InsideTester& inside,
                          const ShellCheckOptions& options, ShellCheckResult& result) {
   const std::size_t n = tets.size();
   if (n == 0) return;
-  std::vector<TetGeometry> geo(n);
+  const bool by_source = mesh.source_triangle.size() == mesh.tets.size();
+  const std::uint32_t G =
+      by_source ? 3 * static_cast<std::uint32_t>(std::max(1, options.layers)) : 1;
+  // Per position in `tets`: its key; per key: its tet (absent keys: none).
+  std::vector<std::uint32_t> key_of(n);
+  std::uint32_t next = 0;  // the next free key
+  for (std::size_t k = 0; k < n; ++k) {
+    const bool same_group = by_source && k > 0 && next % G != 0 &&
+                            mesh.source_triangle[tets[k]] == mesh.source_triangle[tets[k - 1]];
+    if (!same_group) next = (next + G - 1) / G * G;  // the first key of a fresh group
+    key_of[k] = next++;
+  }
+  const std::size_t key_count = (next + G - 1) / G * G;
+  if (key_count > UINT32_MAX)
+    throw InputError("check_shell: " + std::to_string(n) + " tets in groups of " +
+                     std::to_string(G) + " need more than 2^32 keys; check fewer tets");
+  std::vector<TetGeometry> geo(key_count);  // absent keys: empty boxes
+  std::vector<std::uint32_t> tet_of_key(key_count, 0);
   for_each_chunk(
       n,
       [&](std::size_t begin, std::size_t end) {
-        for (std::size_t k = begin; k != end; ++k)
-          geo[k] = tet_geometry(tet_corners(mesh, tets[k]));
+        for (std::size_t k = begin; k != end; ++k) {
+          geo[key_of[k]] = tet_geometry(tet_corners(mesh, tets[k]));
+          tet_of_key[key_of[k]] = tets[k];
+        }
       },
       1024);
   const BBox box = bounding_box_of(geo);
   const double cell_size = grid_cell_size(geo, box);
-  BroadPhase phase(surface, box, cell_size, std::move(geo), options.check_leaks);
-  std::vector<std::uint32_t> keys(n), query_keys(queries.size());
-  std::iota(keys.begin(), keys.end(), 0u);
-  phase.insert(keys);
+  BroadPhase phase(surface, box, cell_size, std::move(geo), options.check_leaks, G);
+  std::vector<std::uint32_t> query_keys(queries.size());
+  phase.insert(key_of);
   for (std::size_t i = 0; i < queries.size(); ++i)
-    query_keys[i] = static_cast<std::uint32_t>(
-        std::lower_bound(tets.begin(), tets.end(), queries[i]) - tets.begin());
+    query_keys[i] = key_of[static_cast<std::size_t>(
+        std::lower_bound(tets.begin(), tets.end(), queries[i]) - tets.begin())];
   const std::vector<TetFindings> found = find_intersections(phase, query_keys, inside, options);
   record_intersections(
-      found, query_keys, [&](std::uint32_t key) { return tets[key]; }, options, result);
+      found, query_keys, [&](std::uint32_t key) { return tet_of_key[key]; }, options, result);
 }
 
 // The tets flagged in `added` and every tet whose box meets one of theirs, ascending.

@@ -290,11 +290,12 @@ void invert_cells(const std::vector<std::uint64_t>& start, const std::vector<std
     for (std::uint64_t k = start[i]; k < start[i + 1]; ++k) items[fill[cells[k]]++] = id[i];
 }
 
-// Slots of tets by a Z-order curve through the centres of their boxes in `box`: per key its slot
-// (`slot`) and per slot its key (`key`). Ties (and empty geometry) in key order.
-void z_order(const std::vector<TetGeometry>& geo, const BBox& box, std::vector<std::uint32_t>& slot,
-             std::vector<std::uint32_t>& key) {
-  const auto n = static_cast<std::uint32_t>(geo.size());
+// Slots of groups by a Z-order curve through the centres of their boxes (`boxes`, one per group)
+// in `box`: per group its slot (`slot`) and per slot its group (`group`). Ties (and empty boxes)
+// in group order.
+void z_order(const std::vector<BBox>& boxes, const BBox& box, std::vector<std::uint32_t>& slot,
+             std::vector<std::uint32_t>& group) {
+  const auto n = static_cast<std::uint32_t>(boxes.size());
   // Spreads the 21 low bits of x to every third bit.
   const auto spread = [](std::uint64_t x) {
     x &= 0x1fffff;
@@ -306,38 +307,51 @@ void z_order(const std::vector<TetGeometry>& geo, const BBox& box, std::vector<s
     return x;
   };
   const double scale = box.max_side() > 0.0 ? 2097151.0 / box.max_side() : 0.0;
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> order(n);  // (code, key)
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> order(n);  // (code, group)
   for_each_index(n, [&](std::size_t k) {
     order[k] = {0, static_cast<std::uint32_t>(k)};
-    if (geo[k].box.empty()) return;
-    const Vec3d c = (geo[k].box.lo + geo[k].box.hi) * 0.5 - box.lo;
+    if (boxes[k].empty()) return;
+    const Vec3d c = (boxes[k].lo + boxes[k].hi) * 0.5 - box.lo;
     std::uint64_t q[3];
     for (int a = 0; a < 3; ++a)
       q[a] = static_cast<std::uint64_t>(std::clamp(c[a] * scale, 0.0, 2097151.0));
     order[k].first = spread(q[0]) | spread(q[1]) << 1 | spread(q[2]) << 2;
   });
   parallel_sort(order.begin(), order.end());
-  key.resize(n);
+  group.resize(n);
   slot.resize(n);
   for (std::uint32_t s = 0; s < n; ++s) {
-    key[s] = order[s].second;
-    slot[key[s]] = s;
+    group[s] = order[s].second;
+    slot[group[s]] = s;
   }
 }
 
 }  // namespace
 
 BroadPhase::BroadPhase(const SurfaceMesh& surface, const BBox& box, double cell_size,
-                       std::vector<TetGeometry> geometry, bool enter_triangles)
+                       std::vector<TetGeometry> geometry, bool enter_triangles,
+                       std::uint32_t group_size)
     : surface_(surface),
       grid_(box, cell_size),
-      box_(geometry.size()),
-      state_(geometry.size(), kAbsent),
-      slot_cells_(geometry.size()),
+      group_(std::max<std::uint32_t>(1, group_size)),
+      key_count_(geometry.size()),
       cell_slots_(grid_.num_cells()) {
-  z_order(geometry, box, slot_, key_);
-  geo_.resize(geometry.size());
-  for_each_index(geometry.size(), [&](std::size_t s) { geo_[s] = geometry[key_[s]]; });
+  const std::size_t groups = (key_count_ + group_ - 1) / group_;
+  std::vector<BBox> boxes(groups);
+  for (std::size_t k = 0; k < key_count_; ++k)
+    if (!geometry[k].box.empty()) {
+      boxes[k / group_].expand(geometry[k].box.lo);
+      boxes[k / group_].expand(geometry[k].box.hi);
+    }
+  z_order(boxes, box, slot_, key_);
+  geo_.resize(groups * group_);  // the missing keys of the last group: empty, never present
+  for_each_index(key_count_,
+                 [&](std::size_t k) { geo_[index(static_cast<std::uint32_t>(k))] = geometry[k]; });
+  box_.resize(geo_.size());
+  present_.assign(geo_.size(), 0);
+  slot_box_.resize(groups);
+  state_.assign(groups, kAbsent);
+  slot_cells_ = PooledLists(groups);
   if (enter_triangles) this->enter_triangles();
 }
 
@@ -361,88 +375,137 @@ void BroadPhase::enter_triangles() {
   invert_cells(start, cells, id, grid_.num_cells(), triangle_start_, triangle_items_);
 }
 
-void BroadPhase::set_geometry(std::uint32_t key, const TetGeometry& g) { geo_[slot_[key]] = g; }
+void BroadPhase::set_geometry(std::uint32_t key, const TetGeometry& g) { geo_[index(key)] = g; }
 
 std::vector<std::uint32_t> BroadPhase::slots_of(const std::vector<std::uint32_t>& keys) const {
   std::vector<std::uint32_t> slots(keys.size());
-  for (std::size_t i = 0; i < keys.size(); ++i) slots[i] = slot_[keys[i]];
+  for (std::size_t i = 0; i < keys.size(); ++i) slots[i] = slot_[keys[i] / group_];
   std::sort(slots.begin(), slots.end());
+  slots.erase(std::unique(slots.begin(), slots.end()), slots.end());
   return slots;
 }
 
 void BroadPhase::insert(const std::vector<std::uint32_t>& keys) {
-  const std::vector<std::uint32_t> slots = slots_of(keys);
+  for (const std::uint32_t key : keys) {
+    const std::uint32_t i = index(key);
+    present_[i] = 1;
+    box_[i] = geo_[i].box;
+  }
+  size_ += keys.size();
+  reenter(slots_of(keys));
+}
+
+void BroadPhase::remove(const std::vector<std::uint32_t>& keys) {
+  std::vector<std::uint32_t> gone;
+  for (const std::uint32_t key : keys) {
+    const std::uint32_t i = index(key);
+    if (!present_[i]) continue;
+    present_[i] = 0;
+    box_[i] = BBox{};
+    gone.push_back(key);
+    --size_;
+  }
+  reenter(slots_of(gone));
+}
+
+void BroadPhase::reenter(const std::vector<std::uint32_t>& slots) {
+  // Out of the grid: the cells they were in lose them, each cell's list edited once.
+  const bool was_empty =
+      std::all_of(state_.begin(), state_.end(), [](State s) { return s == kAbsent; });
+  if (!was_empty) {
+    std::vector<std::uint8_t> drop(state_.size(), 0);
+    std::vector<std::uint32_t> cells;
+    bool stray = false;
+    for (const std::uint32_t slot : slots) {
+      if (state_[slot] == kAbsent) continue;
+      drop[slot] = 1;
+      if (state_[slot] == kStray) {
+        stray = true;
+      } else {
+        cells.insert(cells.end(), slot_cells_.begin(slot), slot_cells_.end(slot));
+        slot_cells_.set(slot, nullptr, 0);
+      }
+      state_[slot] = kAbsent;
+    }
+    if (stray)
+      stray_slots_.erase(std::remove_if(stray_slots_.begin(), stray_slots_.end(),
+                                        [&](std::uint32_t s) { return drop[s] != 0; }),
+                         stray_slots_.end());
+    parallel_sort(cells.begin(), cells.end());  // equal cells are the same value
+    cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+    for (const std::uint32_t c : cells) cell_slots_.erase_flagged(c, drop);
+  }
+  // Back in, with the cells of their present tets.
   const std::size_t n = slots.size();
   std::vector<std::uint8_t> stray(n, 0);
+  for_each_index(n, [&](std::size_t i) {
+    const std::uint32_t s = slots[i];
+    BBox b;
+    for (std::uint32_t j = s * group_; j < (s + 1) * group_; ++j)
+      if (present_[j]) {
+        b.expand(box_[j].lo);
+        b.expand(box_[j].hi);
+        if (!grid_.contains(box_[j])) stray[i] = 1;
+      }
+    slot_box_[s] = b;
+  });
+  const auto in_grid = [&](std::size_t i) { return !stray[i] && !slot_box_[slots[i]].empty(); };
   std::vector<std::uint64_t> start;
-  for_each_index(n, [&](std::size_t i) { stray[i] = grid_.contains(geo_[slots[i]].box) ? 0 : 1; });
   std::vector<std::uint32_t> cells = collect_cells(
-      n, [&](std::size_t i) { return stray[i] ? 0 : grid_.box_cells(geo_[slots[i]].box); },
+      n,
+      [&](std::size_t i) {
+        std::size_t bound = 0;
+        if (in_grid(i))
+          for (std::uint32_t j = slots[i] * group_; j < (slots[i] + 1) * group_; ++j)
+            if (present_[j]) bound += grid_.box_cells(box_[j]);
+        return bound;
+      },
       [&](std::size_t i, std::uint32_t* out) -> std::size_t {
-        return stray[i] ? 0 : grid_.cells_of(geo_[slots[i]], out);
+        if (!in_grid(i)) return 0;
+        std::size_t count = 0;
+        for (std::uint32_t j = slots[i] * group_; j < (slots[i] + 1) * group_; ++j)
+          if (present_[j]) count += grid_.cells_of(geo_[j], out + count);
+        if (group_ > 1) {  // the union of the tets' ascending lists
+          std::sort(out, out + count);
+          count = static_cast<std::size_t>(std::unique(out, out + count) - out);
+        }
+        return count;
       },
       start);
   for (std::size_t i = 0; i < n; ++i) {
     const std::uint32_t slot = slots[i];
-    box_[slot] = geo_[slot].box;
-    state_[slot] = stray[i] ? kStray : kInGrid;
-    if (stray[i]) stray_slots_.push_back(slot);
+    state_[slot] = stray[i] ? kStray : (slot_box_[slot].empty() ? kAbsent : kInGrid);
+    if (state_[slot] == kStray) stray_slots_.push_back(slot);
   }
-  if (size_ == 0) {  // every list is empty: all of them in one pass
-    std::vector<std::uint64_t> slot_start(geo_.size() + 1, 0);
+  if (was_empty) {  // every list is empty: all of them in one pass
+    std::vector<std::uint64_t> slot_start(state_.size() + 1, 0);
     for (std::size_t i = 0; i < n; ++i) slot_start[slots[i] + 1] = start[i + 1] - start[i];
-    for (std::size_t k = 0; k < geo_.size(); ++k) slot_start[k + 1] += slot_start[k];
+    for (std::size_t k = 0; k < state_.size(); ++k) slot_start[k + 1] += slot_start[k];
     std::vector<std::uint64_t> cell_start;
     std::vector<std::uint32_t> items;
     invert_cells(start, cells, slots, grid_.num_cells(), cell_start, items);
     cell_slots_.assign(std::move(cell_start), std::move(items));
     slot_cells_.assign(std::move(slot_start), std::move(cells));  // slots ascending: in order
-  } else {
-    // Every (cell, slot) entry, by cell and then slot: each cell's list is merged once.
-    std::vector<std::uint64_t> entries;
-    entries.reserve(cells.size());
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::uint32_t slot = slots[i];
-      slot_cells_.set(slot, cells.data() + start[i], start[i + 1] - start[i]);
-      for (std::uint64_t k = start[i]; k < start[i + 1]; ++k)
-        entries.push_back(std::uint64_t{cells[k]} << 32 | slot);
-    }
-    parallel_sort(entries.begin(), entries.end());  // distinct entries: the same order always
-    std::vector<std::uint32_t> run;
-    for (std::size_t i = 0; i < entries.size();) {
-      const auto cell = static_cast<std::uint32_t>(entries[i] >> 32);
-      run.clear();
-      for (; i < entries.size() && static_cast<std::uint32_t>(entries[i] >> 32) == cell; ++i)
-        run.push_back(static_cast<std::uint32_t>(entries[i]));
-      cell_slots_.merge_sorted(cell, run.data(), run.size());
-    }
+    return;
   }
-  size_ += n;
-}
-
-void BroadPhase::remove(const std::vector<std::uint32_t>& keys) {
-  std::vector<std::uint8_t> drop(geo_.size(), 0);
-  std::vector<std::uint32_t> cells;
-  bool stray = false;
-  for (const std::uint32_t slot : slots_of(keys)) {
-    if (state_[slot] == kAbsent) continue;
-    drop[slot] = 1;
-    if (state_[slot] == kStray) {
-      stray = true;
-    } else {
-      cells.insert(cells.end(), slot_cells_.begin(slot), slot_cells_.end(slot));
-      slot_cells_.set(slot, nullptr, 0);
-    }
-    state_[slot] = kAbsent;
-    --size_;
+  // Every (cell, slot) entry, by cell and then slot: each cell's list is merged once.
+  std::vector<std::uint64_t> entries;
+  entries.reserve(cells.size());
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint32_t slot = slots[i];
+    slot_cells_.set(slot, cells.data() + start[i], start[i + 1] - start[i]);
+    for (std::uint64_t k = start[i]; k < start[i + 1]; ++k)
+      entries.push_back(std::uint64_t{cells[k]} << 32 | slot);
   }
-  if (stray)
-    stray_slots_.erase(std::remove_if(stray_slots_.begin(), stray_slots_.end(),
-                                      [&](std::uint32_t k) { return drop[k] != 0; }),
-                       stray_slots_.end());
-  parallel_sort(cells.begin(), cells.end());  // equal cells are the same value
-  cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
-  for (const std::uint32_t c : cells) cell_slots_.erase_flagged(c, drop);
+  parallel_sort(entries.begin(), entries.end());  // distinct entries: the same order always
+  std::vector<std::uint32_t> run;
+  for (std::size_t i = 0; i < entries.size();) {
+    const auto cell = static_cast<std::uint32_t>(entries[i] >> 32);
+    run.clear();
+    for (; i < entries.size() && static_cast<std::uint32_t>(entries[i] >> 32) == cell; ++i)
+      run.push_back(static_cast<std::uint32_t>(entries[i]));
+    cell_slots_.merge_sorted(cell, run.data(), run.size());
+  }
 }
 
 }  // namespace vdb_shell

@@ -115,58 +115,77 @@ class PooledLists {
 };
 
 /// Tets and surface triangles in the cells of one TetGrid. A tet is named by a key in
-/// [0, key_count()); a key is absent, in the grid, or stray: its box leaves the grid's box, and it
-/// is then a candidate of every tet and every triangle a candidate of it.
+/// [0, key_count()); a key is absent or present. Keys come in groups of group_size() (key k is in
+/// group k / group_size(): the tets of one prism), and the grid holds groups, not tets: a group
+/// enters the cells of its present tets, and two tets can only intersect when their groups share
+/// a cell. A group is stray when one of its tets' boxes leaves the grid's box: it is then a
+/// candidate of every group, and every triangle a candidate of it. Grouping the tets that fill the
+/// same space (the three needles of one prism) makes the cell lists shorter by the group's size,
+/// and the reads of a query, which grow with the square of the lists' lengths, fewer by its square.
 ///
-/// Inside, the phase numbers the keys its own way: slots, in the order of a Z-order curve through
-/// the centres of the constructor's geometry, so that tets near each other have near slots and a
-/// query's reads of cell lists, marks and geometry stay in few cache lines whatever order the
-/// caller's keys are in (a mesh with shuffled faces is checked as fast as a coherent one). The
-/// queries below take and visit slots; cell lists are kept in increasing slot order.
+/// Inside, the phase numbers the groups its own way: slots, in the order of a Z-order curve
+/// through the centres of the constructor's geometry, so that groups near each other have near
+/// slots and a query's reads of cell lists, marks and geometry stay in few cache lines whatever
+/// order the caller's keys are in (a mesh with shuffled faces is checked as fast as a coherent
+/// one). Tet j of the group in slot s is at *index* s * group_size() + j. The queries below take
+/// and visit slots; cell lists are kept in increasing slot order.
 class BroadPhase {
  public:
   /// A grid over `box` with cells of side `cell_size` (world units) for the tets of keys
-  /// [0, geometry.size()), none entered yet; tet k has the geometry geometry[k] until
-  /// set_geometry() changes it (the slots stay those of this first geometry). With
-  /// `enter_triangles`, every triangle of `surface` whose box meets `box` is entered in the cells
-  /// of TetGrid::cells_of_triangle(). `surface` must outlive the object.
+  /// [0, geometry.size()) in groups of `group_size` (>= 1), none entered yet; tet k has the
+  /// geometry geometry[k] until set_geometry() changes it (the slots stay those of this first
+  /// geometry). With `enter_triangles`, every triangle of `surface` whose box meets `box` is
+  /// entered in the cells of TetGrid::cells_of_triangle(). `surface` must outlive the object.
   BroadPhase(const SurfaceMesh& surface, const BBox& box, double cell_size,
-             std::vector<TetGeometry> geometry, bool enter_triangles);
+             std::vector<TetGeometry> geometry, bool enter_triangles, std::uint32_t group_size = 1);
 
   /// Gives tet `key` the geometry `g`. \pre !contains(key)
   void set_geometry(std::uint32_t key, const TetGeometry& g);
-  /// Enters the tets `keys` (distinct, absent) at their geometry. Their cells are found in
-  /// parallel; into an empty phase the cell lists are built in one pass.
+  /// Enters the tets `keys` (distinct, absent) at their geometry. Their groups' cells are found
+  /// in parallel; into an empty phase the cell lists are built in one pass.
   void insert(const std::vector<std::uint32_t>& keys);
   /// Removes the tets `keys` (distinct); does nothing for those absent. Each cell's list is
   /// edited once, however many of them it held.
   void remove(const std::vector<std::uint32_t>& keys);
 
   const SurfaceMesh& surface() const { return surface_; }
-  std::size_t key_count() const { return geo_.size(); }
-  /// How many keys are in the grid or stray.
+  std::size_t key_count() const { return key_count_; }
+  std::uint32_t group_size() const { return group_; }
+  /// How many slots (groups) there are.
+  std::size_t slot_count() const { return key_.size(); }
+  /// How many keys are present.
   std::size_t size() const { return size_; }
-  bool contains(std::uint32_t key) const { return state_[slot_[key]] != kAbsent; }
-  const TetGeometry& geometry(std::uint32_t key) const { return geo_[slot_[key]]; }
+  bool contains(std::uint32_t key) const { return present_[index(key)] != 0; }
+  const TetGeometry& geometry(std::uint32_t key) const { return geo_[index(key)]; }
 
-  /// The slot of `key`, and the key of `slot` (both in [0, key_count())).
-  std::uint32_t slot(std::uint32_t key) const { return slot_[key]; }
-  std::uint32_t key(std::uint32_t slot) const { return key_[slot]; }
-  const TetGeometry& slot_geometry(std::uint32_t slot) const { return geo_[slot]; }
-  /// Its box, kept apart from the geometry so that the candidates' boxes are read compactly.
-  const BBox& slot_box(std::uint32_t slot) const { return box_[slot]; }
+  /// The index of `key` (slot of its group times group_size() plus its place in the group), and
+  /// the key at `index`.
+  std::uint32_t index(std::uint32_t key) const {
+    return slot_[key / group_] * group_ + key % group_;
+  }
+  std::uint32_t key_at(std::uint32_t index) const {
+    return key_[index / group_] * group_ + index % group_;
+  }
+  /// Whether the tet at `index` is present, its geometry, and its box (kept apart from the
+  /// geometry, so that the candidates' boxes are read compactly).
+  bool present_at(std::uint32_t index) const { return present_[index] != 0; }
+  const TetGeometry& geometry_at(std::uint32_t index) const { return geo_[index]; }
+  const BBox& box_at(std::uint32_t index) const { return box_[index]; }
+  /// The box of the present tets of the group in `slot`.
+  const BBox& slot_box(std::uint32_t slot) const { return slot_box_[slot]; }
 
-  /// Calls visit(other) once for every slot `other` whose tet shares a cell with that of `slot`
-  /// (`slot` itself included), every stray tet's slot, and, when `slot` is stray, every slot in
-  /// the phase. With `only_greater` the slots below `slot` in its cells are skipped. `mark` has
-  /// one entry per slot, none equal to `stamp` before the call; it marks the slots visited.
+  /// Calls visit(other) once for every slot `other` whose group shares a cell with that of `slot`
+  /// (`slot` itself included), every stray group's slot, and, when `slot` is stray, every slot
+  /// with a present tet. With `only_greater` the slots below `slot` in its cells are skipped.
+  /// `mark` has one entry per slot, none equal to `stamp` before the call; it marks the slots
+  /// visited.
   template <class Visit>
-  void for_each_tet_near(std::uint32_t slot, bool only_greater, std::vector<std::uint32_t>& mark,
-                         std::uint32_t stamp, const Visit& visit) const;
+  void for_each_group_near(std::uint32_t slot, bool only_greater, std::vector<std::uint32_t>& mark,
+                           std::uint32_t stamp, const Visit& visit) const;
 
-  /// Calls visit(f) once for every surface triangle f that shares a cell with the tet of `slot`,
-  /// or for every triangle when it is stray; for none unless the triangles were entered. `mark`:
-  /// one entry per triangle, as above.
+  /// Calls visit(f) once for every surface triangle f that shares a cell with the group of
+  /// `slot`, or for every triangle when it is stray; for none unless the triangles were entered.
+  /// `mark`: one entry per triangle, as above.
   template <class Visit>
   void for_each_triangle_near(std::uint32_t slot, std::vector<std::uint32_t>& mark,
                               std::uint32_t stamp, const Visit& visit) const;
@@ -176,14 +195,21 @@ class BroadPhase {
 
   void enter_triangles();
 
-  // The slots of `keys`, ascending.
+  // The slots of the groups of `keys`, ascending, each once.
   std::vector<std::uint32_t> slots_of(const std::vector<std::uint32_t>& keys) const;
+  // Takes the groups in `slots` (ascending, distinct) out of the grid and enters each again with
+  // its present tets, if it has any.
+  void reenter(const std::vector<std::uint32_t>& slots);
 
   const SurfaceMesh& surface_;
   TetGrid grid_;
-  std::vector<std::uint32_t> slot_, key_;  // per key its slot, per slot its key
-  std::vector<TetGeometry> geo_;           // per slot
-  std::vector<BBox> box_;                  // per slot
+  std::uint32_t group_ = 1;
+  std::size_t key_count_ = 0;
+  std::vector<std::uint32_t> slot_, key_;  // per group its slot, per slot its group
+  std::vector<TetGeometry> geo_;           // per index
+  std::vector<BBox> box_;                  // per index: the tet's box while it is present
+  std::vector<std::uint8_t> present_;      // per index
+  std::vector<BBox> slot_box_;             // per slot
   std::vector<State> state_;               // per slot
   std::size_t size_ = 0;
   PooledLists slot_cells_;                  // per slot: its cells, ascending (none when stray)
@@ -193,9 +219,9 @@ class BroadPhase {
 };
 
 template <class Visit>
-void BroadPhase::for_each_tet_near(std::uint32_t slot, bool only_greater,
-                                   std::vector<std::uint32_t>& mark, std::uint32_t stamp,
-                                   const Visit& visit) const {
+void BroadPhase::for_each_group_near(std::uint32_t slot, bool only_greater,
+                                     std::vector<std::uint32_t>& mark, std::uint32_t stamp,
+                                     const Visit& visit) const {
   std::uint32_t* const marks = mark.data();
   const auto once = [&](std::uint32_t other) {
     if (marks[other] == stamp) return;
@@ -210,7 +236,7 @@ void BroadPhase::for_each_tet_near(std::uint32_t slot, bool only_greater,
   for (const std::uint32_t* c = slot_cells_.begin(slot); c != slot_cells_.end(slot); ++c) {
     const std::uint32_t* first = cell_slots_.begin(*c);
     const std::uint32_t* last = cell_slots_.end(*c);
-    for (const std::uint32_t* it = only_greater ? std::upper_bound(first, last, slot) : first;
+    for (const std::uint32_t* it = only_greater ? std::lower_bound(first, last, slot) : first;
          it != last; ++it)
       once(*it);
   }

@@ -2,12 +2,16 @@
 // (every tet is a query) and ShellChecker (the queries are the tets of the prisms that moved or
 // offended; every other pair is trusted).
 //
-// Each query tet is tested, in parallel, against its candidates in a BroadPhase (tet_grid.h):
-//   * overlaps: every tet sharing a cell with it whose box meets its own goes to tets_intersect()
-//     (tet_predicates.h). A pair of two queries is tested once, from the smaller key; a pair of
-//     two tets that are not queries is not tested at all;
-//   * leaks: it leaks when its centroid is outside the surface, or a surface triangle sharing a
-//     cell with it crosses its interior (surface_triangle_crosses()).
+// The queries are tested group by group of the BroadPhase (tet_grid.h), in parallel:
+//   * overlaps: every tet of a group sharing a cell with the query's group goes to
+//     tets_intersect() (tet_predicates.h) when its box meets the query's and, for groups of more
+//     than one tet, no face normal of the query group's tets separates the two groups (their
+//     corners overlap by nothing along it: every pair of their tets is then apart, as
+//     tets_intersect() would find too). A pair of two queries is tested once, from the smaller
+//     index; a pair of two tets that are not queries is not tested at all;
+//   * leaks: a query leaks when its centroid is outside the surface, or a surface triangle sharing
+//     a cell with its group, and not separated from the group by those axes, crosses its interior
+//     (surface_triangle_crosses()).
 // Both use options.overlap_tolerance, relative to the longest edge involved. Deterministic: each
 // query writes only its own result, which does not depend on the thread count.
 //
