@@ -350,6 +350,8 @@ BroadPhase::BroadPhase(const SurfaceMesh& surface, const BBox& box, double cell_
   box_.resize(geo_.size());
   present_.assign(geo_.size(), 0);
   slot_box_.resize(groups);
+  corners_.resize(geo_.size() * 4);
+  corner_count_.assign(groups, 0);
   state_.assign(groups, kAbsent);
   slot_cells_ = PooledLists(groups);
   if (enter_triangles) this->enter_triangles();
@@ -441,13 +443,18 @@ void BroadPhase::reenter(const std::vector<std::uint32_t>& slots) {
   for_each_index(n, [&](std::size_t i) {
     const std::uint32_t s = slots[i];
     BBox b;
+    Vec3d* corners = corners_.data() + std::size_t{4} * group_ * s;
+    std::uint32_t count = 0;
     for (std::uint32_t j = s * group_; j < (s + 1) * group_; ++j)
       if (present_[j]) {
         b.expand(box_[j].lo);
         b.expand(box_[j].hi);
         if (!grid_.contains(box_[j])) stray[i] = 1;
+        for (const Vec3d& p : geo_[j].p)
+          if (std::find(corners, corners + count, p) == corners + count) corners[count++] = p;
       }
     slot_box_[s] = b;
+    corner_count_[s] = count;
   });
   const auto in_grid = [&](std::size_t i) { return !stray[i] && !slot_box_[slots[i]].empty(); };
   std::vector<std::uint64_t> start;

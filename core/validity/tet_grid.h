@@ -173,6 +173,11 @@ class BroadPhase {
   const BBox& box_at(std::uint32_t index) const { return box_[index]; }
   /// The box of the present tets of the group in `slot`.
   const BBox& slot_box(std::uint32_t slot) const { return slot_box_[slot]; }
+  /// The distinct corners of the present tets of the group in `slot`, side by side.
+  const Vec3d* slot_corners(std::uint32_t slot) const {
+    return corners_.data() + std::size_t{4} * group_ * slot;
+  }
+  std::uint32_t slot_corner_count(std::uint32_t slot) const { return corner_count_[slot]; }
 
   /// Calls visit(other) once for every slot `other` whose group shares a cell with that of `slot`
   /// (`slot` itself included), every stray group's slot, and, when `slot` is stray, every slot
@@ -205,12 +210,14 @@ class BroadPhase {
   TetGrid grid_;
   std::uint32_t group_ = 1;
   std::size_t key_count_ = 0;
-  std::vector<std::uint32_t> slot_, key_;  // per group its slot, per slot its group
-  std::vector<TetGeometry> geo_;           // per index
-  std::vector<BBox> box_;                  // per index: the tet's box while it is present
-  std::vector<std::uint8_t> present_;      // per index
-  std::vector<BBox> slot_box_;             // per slot
-  std::vector<State> state_;               // per slot
+  std::vector<std::uint32_t> slot_, key_;    // per group its slot, per slot its group
+  std::vector<TetGeometry> geo_;             // per index
+  std::vector<BBox> box_;                    // per index: the tet's box while it is present
+  std::vector<std::uint8_t> present_;        // per index
+  std::vector<BBox> slot_box_;               // per slot
+  std::vector<Vec3d> corners_;               // per slot 4 group_ entries, the first corner_count_
+  std::vector<std::uint32_t> corner_count_;  // per slot
+  std::vector<State> state_;                 // per slot
   std::size_t size_ = 0;
   PooledLists slot_cells_;                  // per slot: its cells, ascending (none when stray)
   PooledLists cell_slots_;                  // per cell: its slots, ascending

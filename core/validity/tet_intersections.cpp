@@ -22,10 +22,12 @@ struct GroupHull {
   Vec3d origin;
   std::vector<Vec3d> axes;
   std::vector<double> lo, hi;
+  std::size_t last = 0;  // the axis that separated last
 
   void build(const BroadPhase& phase, const std::uint32_t* index, std::uint32_t count) {
     origin = phase.geometry_at(index[0]).p[0];
     axes.clear();
+    last = 0;
     for (std::uint32_t q = 0; q < count; ++q)
       for (const Vec3d& n : phase.geometry_at(index[q]).n)
         if (norm2(n) > 0.0) axes.push_back(n);
@@ -42,18 +44,24 @@ struct GroupHull {
       }
   }
 
-  // Whether one of the axes separates the hull from the points `p` (relative to `origin`).
-  template <class Points>
-  bool separates(const Points& p) const {
-    for (std::size_t k = 0; k < axes.size(); ++k) {
+  // Whether one of the axes separates the hull from the `count` points `p` (relative to
+  // `origin`). The axis that separated last is tried first: neighbouring candidates tend to be
+  // apart along the same one.
+  bool separates(const Vec3d* p, std::size_t count) {
+    const std::size_t n_axes = axes.size();
+    for (std::size_t i = 0; i < n_axes; ++i) {
+      const std::size_t k = last + i < n_axes ? last + i : last + i - n_axes;
       const Vec3d& n = axes[k];
       double p_lo = dot(n, p[0]), p_hi = p_lo;
-      for (std::size_t i = 1; i < p.size(); ++i) {
-        const double x = dot(n, p[i]);
+      for (std::size_t c = 1; c < count; ++c) {
+        const double x = dot(n, p[c]);
         p_lo = std::min(p_lo, x);
         p_hi = std::max(p_hi, x);
       }
-      if (p_lo >= hi[k] || p_hi <= lo[k]) return true;
+      if (p_lo >= hi[k] || p_hi <= lo[k]) {
+        last = k;
+        return true;
+      }
     }
     return false;
   }
@@ -95,12 +103,12 @@ void find_overlaps(const BroadPhase& phase, const Queries& queries, const GroupQ
       group.slot, all_queries, scratch.groups, group.slot + 1, [&](std::uint32_t other) {
         if (!boxes_overlap(phase.slot_box(group.slot), phase.slot_box(other))) return;
         if (G > 1 && other != group.slot) {
-          scratch.corners.clear();
-          for (std::uint32_t j = other * G; j < (other + 1) * G; ++j)
-            if (phase.present_at(j))
-              for (const Vec3d& p : phase.geometry_at(j).p)
-                scratch.corners.push_back(p - scratch.hull.origin);
-          if (scratch.hull.separates(scratch.corners)) return;
+          const Vec3d* corners = phase.slot_corners(other);
+          const std::uint32_t count = phase.slot_corner_count(other);
+          scratch.corners.resize(count);
+          for (std::uint32_t c = 0; c < count; ++c)
+            scratch.corners[c] = corners[c] - scratch.hull.origin;
+          if (scratch.hull.separates(scratch.corners.data(), count)) return;
         }
         for (std::uint32_t j = other * G; j < (other + 1) * G; ++j) {
           if (!phase.present_at(j)) continue;
@@ -137,7 +145,7 @@ void find_leaks(const BroadPhase& phase, const Queries& queries, const GroupQuer
     if (hull) {
       std::array<Vec3d, 3> t = triangle_corners(phase.surface(), f);
       for (Vec3d& p : t) p = p - scratch.hull.origin;
-      if (scratch.hull.separates(t)) return;
+      if (scratch.hull.separates(t.data(), 3)) return;
     }
     for (std::uint32_t q = 0; q < group.count; ++q) {
       TetFindings& out = found[query[q]];
