@@ -113,7 +113,7 @@ struct ShellChecker::Impl {
                           ShellCheckResult& result);
   std::vector<std::uint8_t> changed_prisms(const TetMesh& mesh,
                                            const std::vector<std::uint32_t>& first) const;
-  void build_phase(const MovedPrisms& all);
+  void build_phase(MovedPrisms all);
   void move_prisms(const TetMesh& mesh, const std::vector<std::uint32_t>& first,
                    const std::vector<std::uint32_t>& moved);
   void check_intersections(const TetMesh& mesh, const std::vector<std::uint32_t>& first,
@@ -177,13 +177,18 @@ std::vector<std::uint8_t> ShellChecker::Impl::changed_prisms(
 
 // The phase, over the surface's box and the first shell's tets `all` (every prism), with a 5%
 // margin, and those tets in it.
-void ShellChecker::Impl::build_phase(const MovedPrisms& all) {
+void ShellChecker::Impl::build_phase(MovedPrisms all) {
   const std::uint32_t P = per_prism;
-  std::vector<TetGeometry> by_key(P * surface.triangles.size());  // absent keys: empty boxes
-  for_each_index(all.faces.size(), [&](std::size_t i) {
-    for (std::uint32_t k = 0; k < all.count[i]; ++k)
-      by_key[P * all.faces[i] + k] = all.geo[P * i + k];
-  });
+  std::vector<TetGeometry> by_key;  // absent keys: empty boxes
+  if (all.faces.size() == surface.triangles.size()) {
+    by_key = std::move(all.geo);  // every prism in order (the first call): already by key
+  } else {
+    by_key.resize(P * surface.triangles.size());
+    for_each_index(all.faces.size(), [&](std::size_t i) {
+      for (std::uint32_t k = 0; k < all.count[i]; ++k)
+        by_key[P * all.faces[i] + k] = all.geo[P * i + k];
+    });
+  }
   std::vector<std::uint32_t> keys;
   for (std::size_t i = 0; i < all.faces.size(); ++i) {
     for (std::uint32_t k = 0; k < all.count[i]; ++k) keys.push_back(P * all.faces[i] + k);
@@ -217,7 +222,7 @@ void ShellChecker::Impl::move_prisms(const TetMesh& mesh, const std::vector<std:
       fresh.geo[P * i + (t - first[f])] = tet_geometry(tet_corners(mesh, t));
   });
   if (!phase) {
-    build_phase(fresh);
+    build_phase(std::move(fresh));
     return;
   }
   std::vector<std::uint32_t> keys;
