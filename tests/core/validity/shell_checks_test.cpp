@@ -447,6 +447,34 @@ TEST(ShellChecks, TetOrderChangesNothingAndEveryOverlapIsFound) {
   EXPECT_EQ(a.first_overlapping_pairs, every);
 }
 
+TEST(ShellChecks, PrismGroupsFindWhatSingleTetsFind) {
+  // check_shell() enters the tets of one source triangle as one group and skips the pairs of two
+  // groups a face normal separates. On a shell with overlapping prisms and leaking ones, near the
+  // origin and far from it, that finds the same overlapping pairs and leaking tets as testing
+  // every tet on its own (no source triangles), from fewer candidate pairs.
+  for (const Vec3d shift : {Vec3d{0, 0, 0}, Vec3d{1e6, -2e6, 3e5}}) {
+    SCOPED_TRACE(shift.x);
+    SurfaceMesh s = make_shape("sphere", 2);
+    TetMesh grouped = broken_sphere_shell(s);
+    const std::size_t n = s.points.size();
+    for (std::size_t v = 5; v < n; v += 89) grouped.points[n + v] = s.points[v] * 1.05;  // out
+    for (Vec3d& p : s.points) p = p + shift;
+    for (Vec3d& p : grouped.points) p = p + shift;
+    ASSERT_EQ(grouped.source_triangle.size(), grouped.tets.size());
+    TetMesh single = grouped;
+    single.source_triangle.clear();
+    ShellCheckOptions options;
+    options.max_listed = std::numeric_limits<std::size_t>::max();
+    const ShellCheckResult a = check_shell(s, grouped, options);
+    const ShellCheckResult b = check_shell(s, single, options);
+    EXPECT_GT(a.overlapping_pairs, 10u);
+    EXPECT_GT(a.leaking_tets, 10u);
+    EXPECT_EQ(a.first_overlapping_pairs, b.first_overlapping_pairs);
+    EXPECT_EQ(a.first_leaking_tets, b.first_leaking_tets);
+    EXPECT_LT(a.overlap_candidate_pairs, b.overlap_candidate_pairs);
+  }
+}
+
 TEST(ShellChecks, AddedTetsAreCheckedAsCheckShellChecksThem) {
   // A valid half-thick sphere shell (hollow inside radius ~0.25) and tets added to it: one in
   // the hollow (apart from everything), two more there crossing each other, one poking into the
