@@ -493,6 +493,9 @@ void resolve_merges(TraceResult& r, const std::vector<std::uint32_t>& which,
         const bool directed = norm2(dir) > 0.0;
         double best = std::numeric_limits<double>::infinity();
         std::uint32_t best_sample = 0;
+        // Local positions farther apart than this are farther than `best` (and ps) exactly too:
+        // they are passed over without reading their sample.
+        float reach2_local = ps2_local;
         const SampleGrid::Local ql = grid.to_local(q);
         // The groups that may hold a partner, nearest box first: once a partner is found,
         // groups farther than it are not read.
@@ -518,7 +521,7 @@ void resolve_merges(TraceResult& r, const std::vector<std::uint32_t>& which,
           for (std::uint32_t e = g.begin; e < g.end; ++e) {
             const SampleGrid::Local& l = grid.local(e);
             const float dx = l.x - ql.x, dy = l.y - ql.y, dz = l.z - ql.z;
-            if (dx * dx + dy * dy + dz * dz > ps2_local) continue;
+            if (dx * dx + dy * dy + dz * dz > reach2_local) continue;
             const Entry& entry = grid.entry(e);
             const Vec3d& s = r.samples[entry.sample];
             const double d2 = norm2(s - q);
@@ -533,6 +536,7 @@ void resolve_merges(TraceResult& r, const std::vector<std::uint32_t>& which,
             best = d;
             best_sample = entry.sample;
             partner[w] = k;
+            reach2_local = std::min(ps2_local, grid.local_radius2(best));
           }
         }
         if (partner[w] >= 0) new_end[w] = closest_approach(r, j, i, r.samples[best_sample], ps);
