@@ -450,9 +450,13 @@ void BroadPhase::reenter(const std::vector<std::uint32_t>& slots) {
         b.expand(box_[j].lo);
         b.expand(box_[j].hi);
         if (!grid_.contains(box_[j])) stray[i] = 1;
-        for (const Vec3d& p : geo_[j].p)
-          if (std::find(corners, corners + count, p) == corners + count) corners[count++] = p;
+        for (const Vec3d& p : geo_[j].p) corners[count++] = p;
       }
+    const auto lexicographic = [](const Vec3d& a, const Vec3d& b) {
+      return a.x != b.x ? a.x < b.x : a.y != b.y ? a.y < b.y : a.z < b.z;
+    };
+    std::sort(corners, corners + count, lexicographic);
+    count = static_cast<std::uint32_t>(std::unique(corners, corners + count) - corners);
     slot_box_[s] = b;
     corner_count_[s] = count;
   });

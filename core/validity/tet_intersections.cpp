@@ -12,36 +12,42 @@
 namespace vdb_shell {
 namespace {
 
-// The hull of a group's query tets, seen along their face normals: `axes`, and the extents
-// [lo, hi] of the tets' corners along them relative to `origin`. When the corners of another group
-// (or a triangle) project on one of these axes overlapping the hull by nothing, the two are
-// disjoint, and so is every pair of their tets, which the pair's separating-axis test would also
-// find (its candidate axes include the direction of least penetration). Tested first, it spares
-// the tests of the 3 x 3 pairs of tets of two prisms that are apart, most of them.
+// The hull of a group, seen along the face normals of its first query tets: `axes`, and the
+// extents [lo, hi] of the group's corners along them relative to `origin`. When the corners of
+// another group (or a triangle) project on one of these axes overlapping the hull by nothing, the
+// two are disjoint, and so is every pair of their tets, which the pair's separating-axis test
+// would also find (its candidate axes include the direction of least penetration). Tested first,
+// it spares the tests of the 3 x 3 pairs of tets of two prisms that are apart, most of them. Any
+// axes would do: the normals of the first kHullTets query tets (a whole prism of one layer) keep
+// the test short for prisms of many layers.
+constexpr std::uint32_t kHullTets = 3;
+
 struct GroupHull {
   Vec3d origin;
   std::vector<Vec3d> axes;
   std::vector<double> lo, hi;
   std::size_t last = 0;  // the axis that separated last
 
-  void build(const BroadPhase& phase, const std::uint32_t* index, std::uint32_t count) {
-    origin = phase.geometry_at(index[0]).p[0];
+  void build(const BroadPhase& phase, std::uint32_t slot, const std::uint32_t* index,
+             std::uint32_t count) {
+    const Vec3d* corners = phase.slot_corners(slot);
+    const std::uint32_t n_corners = phase.slot_corner_count(slot);
+    origin = corners[0];
     axes.clear();
     last = 0;
-    for (std::uint32_t q = 0; q < count; ++q)
+    for (std::uint32_t q = 0; q < std::min(count, kHullTets); ++q)
       for (const Vec3d& n : phase.geometry_at(index[q]).n)
         if (norm2(n) > 0.0) axes.push_back(n);
     lo.assign(axes.size(), std::numeric_limits<double>::infinity());
     hi.assign(axes.size(), -std::numeric_limits<double>::infinity());
-    for (std::uint32_t q = 0; q < count; ++q)
-      for (const Vec3d& p : phase.geometry_at(index[q]).p) {
-        const Vec3d d = p - origin;
-        for (std::size_t k = 0; k < axes.size(); ++k) {
-          const double x = dot(axes[k], d);
-          lo[k] = std::min(lo[k], x);
-          hi[k] = std::max(hi[k], x);
-        }
+    for (std::uint32_t c = 0; c < n_corners; ++c) {
+      const Vec3d d = corners[c] - origin;
+      for (std::size_t k = 0; k < axes.size(); ++k) {
+        const double x = dot(axes[k], d);
+        lo[k] = std::min(lo[k], x);
+        hi[k] = std::max(hi[k], x);
       }
+    }
   }
 
   // Whether one of the axes separates the hull from the `count` points `p` (relative to
@@ -192,7 +198,8 @@ std::vector<TetFindings> find_intersections(const BroadPhase& phase,
         scratch.triangles.assign(options.check_leaks ? phase.surface().triangles.size() : 0, 0);
         for (std::size_t g = begin; g != end; ++g) {
           if (G > 1)
-            scratch.hull.build(phase, by_group.index.data() + groups[g].first, groups[g].count);
+            scratch.hull.build(phase, groups[g].slot, by_group.index.data() + groups[g].first,
+                               groups[g].count);
           if (options.check_overlaps)
             find_overlaps(phase, by_group, groups[g], all_queries, query_at, scratch, options,
                           found);
