@@ -2,7 +2,6 @@
 #include "core/validity/tet_intersections.h"
 
 #include <algorithm>
-#include <array>
 #include <limits>
 #include <utility>
 
@@ -50,17 +49,17 @@ struct GroupHull {
     }
   }
 
-  // Whether one of the axes separates the hull from the `count` points `p` (relative to
-  // `origin`). The axis that separated last is tried first: neighbouring candidates tend to be
-  // apart along the same one.
+  // Whether one of the axes separates the hull from the `count` points `p` (world units). The
+  // axis that separated last is tried first: neighbouring candidates tend to be apart along the
+  // same one.
   bool separates(const Vec3d* p, std::size_t count) {
     const std::size_t n_axes = axes.size();
     for (std::size_t i = 0; i < n_axes; ++i) {
       const std::size_t k = last + i < n_axes ? last + i : last + i - n_axes;
       const Vec3d& n = axes[k];
-      double p_lo = dot(n, p[0]), p_hi = p_lo;
+      double p_lo = dot(n, p[0] - origin), p_hi = p_lo;
       for (std::size_t c = 1; c < count; ++c) {
-        const double x = dot(n, p[c]);
+        const double x = dot(n, p[c] - origin);
         p_lo = std::min(p_lo, x);
         p_hi = std::max(p_hi, x);
       }
@@ -80,7 +79,6 @@ struct Scratch {
   std::vector<std::uint32_t> groups, triangles;
   std::vector<std::size_t> candidates;  // per query of the current group
   GroupHull hull;
-  std::vector<Vec3d> corners;  // a candidate group's, relative to the hull's origin
 };
 
 // The queries of one group, in the phase's index order: query k of the group is at index
@@ -108,14 +106,9 @@ void find_overlaps(const BroadPhase& phase, const Queries& queries, const GroupQ
   phase.for_each_group_near(
       group.slot, all_queries, scratch.groups, group.slot + 1, [&](std::uint32_t other) {
         if (!boxes_overlap(phase.slot_box(group.slot), phase.slot_box(other))) return;
-        if (G > 1 && other != group.slot) {
-          const Vec3d* corners = phase.slot_corners(other);
-          const std::uint32_t count = phase.slot_corner_count(other);
-          scratch.corners.resize(count);
-          for (std::uint32_t c = 0; c < count; ++c)
-            scratch.corners[c] = corners[c] - scratch.hull.origin;
-          if (scratch.hull.separates(scratch.corners.data(), count)) return;
-        }
+        if (G > 1 && other != group.slot &&
+            scratch.hull.separates(phase.slot_corners(other), phase.slot_corner_count(other)))
+          return;
         for (std::uint32_t j = other * G; j < (other + 1) * G; ++j) {
           if (!phase.present_at(j)) continue;
           const BBox& box = phase.box_at(j);
@@ -148,11 +141,7 @@ void find_leaks(const BroadPhase& phase, const Queries& queries, const GroupQuer
   const bool hull = phase.group_size() > 1;
   phase.for_each_triangle_near(group.slot, scratch.triangles, group.slot + 1, [&](std::uint32_t f) {
     if (open == 0) return;
-    if (hull) {
-      std::array<Vec3d, 3> t = triangle_corners(phase.surface(), f);
-      for (Vec3d& p : t) p = p - scratch.hull.origin;
-      if (scratch.hull.separates(t.data(), 3)) return;
-    }
+    if (hull && scratch.hull.separates(triangle_corners(phase.surface(), f).data(), 3)) return;
     for (std::uint32_t q = 0; q < group.count; ++q) {
       TetFindings& out = found[query[q]];
       if (out.leaking) continue;
