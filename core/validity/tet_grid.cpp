@@ -388,13 +388,14 @@ std::vector<std::uint32_t> BroadPhase::slots_of(const std::vector<std::uint32_t>
 }
 
 void BroadPhase::insert(const std::vector<std::uint32_t>& keys) {
+  const bool was_empty = size_ == 0;  // then no group is in the grid
   for (const std::uint32_t key : keys) {
     const std::uint32_t i = index(key);
     present_[i] = 1;
     box_[i] = geo_[i].box;
   }
   size_ += keys.size();
-  reenter(slots_of(keys));
+  reenter(slots_of(keys), was_empty);
 }
 
 void BroadPhase::remove(const std::vector<std::uint32_t>& keys) {
@@ -407,13 +408,11 @@ void BroadPhase::remove(const std::vector<std::uint32_t>& keys) {
     gone.push_back(key);
     --size_;
   }
-  reenter(slots_of(gone));
+  reenter(slots_of(gone), false);
 }
 
-void BroadPhase::reenter(const std::vector<std::uint32_t>& slots) {
+void BroadPhase::reenter(const std::vector<std::uint32_t>& slots, bool was_empty) {
   // Out of the grid: the cells they were in lose them, each cell's list edited once.
-  const bool was_empty =
-      std::all_of(state_.begin(), state_.end(), [](State s) { return s == kAbsent; });
   if (!was_empty) {
     std::vector<std::uint8_t> drop(state_.size(), 0);
     std::vector<std::uint32_t> cells;

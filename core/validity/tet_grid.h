@@ -203,8 +203,9 @@ class BroadPhase {
   // The slots of the groups of `keys`, ascending, each once.
   std::vector<std::uint32_t> slots_of(const std::vector<std::uint32_t>& keys) const;
   // Takes the groups in `slots` (ascending, distinct) out of the grid and enters each again with
-  // its present tets, if it has any.
-  void reenter(const std::vector<std::uint32_t>& slots);
+  // its present tets, if it has any. `was_empty`: no group was in the grid (every list is built
+  // in one pass).
+  void reenter(const std::vector<std::uint32_t>& slots, bool was_empty);
 
   const SurfaceMesh& surface_;
   TetGrid grid_;
