@@ -41,29 +41,36 @@ void check_inner_points(const TetMesh& mesh, const std::vector<std::uint32_t>& i
 // indices, ascending, the queries among them) in one BroadPhase over their bounding box; the
 // queries go to the narrow phase, against each other and the rest. Consecutive tets of `tets` with
 // one source triangle (the tets of a prism) share a group of the phase, up to 3 * options.layers
-// of them; without source triangles each tet is a group.
+// of them; without source triangles, or when most groups would be partial, each tet is a group.
 void check_intersections(const SurfaceMesh& surface, const TetMesh& mesh,
                          const std::vector<std::uint32_t>& tets,
                          const std::vector<std::uint32_t>& queries, const InsideTester& inside,
                          const ShellCheckOptions& options, ShellCheckResult& result) {
   const std::size_t n = tets.size();
   if (n == 0) return;
-  const bool by_source = mesh.source_triangle.size() == mesh.tets.size();
-  const std::uint32_t G =
-      by_source ? 3 * static_cast<std::uint32_t>(std::max(1, options.layers)) : 1;
-  // Per position in `tets`: its key; per key: its tet (absent keys: none).
+  // Per position in `tets`: its key, in groups of `size` keys; the keys a group leaves unused
+  // are absent. Returns how many keys that takes.
   std::vector<std::uint32_t> key_of(n);
-  std::uint32_t next = 0;  // the next free key
-  for (std::size_t k = 0; k < n; ++k) {
-    const bool same_group = by_source && k > 0 && next % G != 0 &&
-                            mesh.source_triangle[tets[k]] == mesh.source_triangle[tets[k - 1]];
-    if (!same_group) next = (next + G - 1) / G * G;  // the first key of a fresh group
-    key_of[k] = next++;
+  const auto assign_keys = [&](std::uint64_t size) {
+    std::uint64_t next = 0;  // the next free key
+    for (std::size_t k = 0; k < n; ++k) {
+      const bool same_group = size > 1 && k > 0 && next % size != 0 &&
+                              mesh.source_triangle[tets[k]] == mesh.source_triangle[tets[k - 1]];
+      if (!same_group) next = (next + size - 1) / size * size;  // a fresh group's first key
+      key_of[k] = static_cast<std::uint32_t>(next++);
+    }
+    return (next + size - 1) / size * size;
+  };
+  std::uint32_t G = mesh.source_triangle.size() == mesh.tets.size()
+                        ? 3 * static_cast<std::uint32_t>(std::max(1, options.layers))
+                        : 1;
+  std::uint64_t key_count = assign_keys(G);
+  // Mostly partial groups (a subset of each prism's tets) would cost more absent keys than the
+  // grouping saves: each tet is a group then.
+  if (G > 1 && (key_count > 2 * std::uint64_t{n} || key_count > UINT32_MAX)) {
+    G = 1;
+    key_count = assign_keys(G);
   }
-  const std::size_t key_count = (next + G - 1) / G * G;
-  if (key_count > UINT32_MAX)
-    throw InputError("check_shell: " + std::to_string(n) + " tets in groups of " +
-                     std::to_string(G) + " need more than 2^32 keys; check fewer tets");
   std::vector<TetGeometry> geo(key_count);  // absent keys: empty boxes
   std::vector<std::uint32_t> tet_of_key(key_count, 0);
   for_each_chunk(
