@@ -1,5 +1,6 @@
 # Installation: `cmake --install build --prefix P` puts the library, its headers, both
-# executables, the Python module and a CMake package under P, so that an outside project can
+# executables, the .vdb reader program, the Python module and a CMake package under P, so that
+# an outside project can
 #   find_package(vdb_shell REQUIRED)
 #   target_link_libraries(app PRIVATE vdb_shell::vdb_shell)
 # The library links OpenVDB and TBB privately: the package needs none of them.
@@ -15,6 +16,8 @@ install(TARGETS vdb_shell_lib EXPORT vdb_shell_targets
   RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR}
   INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 install(TARGETS vdb_shell vdb_shell_shapes RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+# The .vdb reader program, where the library looks for it (vdb_ops/CMakeLists.txt).
+install(TARGETS vdb_shell_vdb_reader RUNTIME DESTINATION ${CMAKE_INSTALL_LIBEXECDIR}/vdb_shell)
 
 # The public header and the headers of the types it hands out (none includes a dependency's).
 install(FILES include/vdb_shell/vdb_shell.h DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/vdb_shell)

@@ -46,9 +46,8 @@ for target in obj off ply stl vdb cli; do
     -print_final_stats=1 -artifact_prefix="$work/artifacts_$target/" > "$log" 2>&1)
   code=$?
   set -e
-  # The .vdb target's reader runs in child processes (vdb_io.cpp), whose crashes are contained
-  # and print their own reports and artifacts: only the target's own exit code counts, and its
-  # final statistics are the last ones printed.
+  # The .vdb target's reader runs in the program vdb_shell_vdb_reader (vdb_io.cpp), whose crashes
+  # are contained and whose reports are discarded: only the target's own exit code counts.
   runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | tail -1 | grep -o '[0-9]*$' ||
     echo 0)
   result=clean

@@ -3,8 +3,8 @@
 // volumeToMesh, at adaptivity 0 and 0.5 with its mending) and the surface meshed from it is
 // validated, as `vdb_shell INPUT.vdb` does without and with --repair. Bad input must end in an
 // InputError, or a
-// ResourceError when OpenVDB's reader (in its child process) runs out of memory on a size the
-// file claims.
+// ResourceError when OpenVDB's reader (the program vdb_shell_vdb_reader) runs out of memory on a
+// size the file claims.
 #include <unistd.h>
 
 #include <cstddef>

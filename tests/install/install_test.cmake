@@ -66,6 +66,12 @@ file(SHA256 ${WORK_DIR}/cli.vtu cli_sha)
 if(NOT example_sha STREQUAL cli_sha)
   message(FATAL_ERROR "the example's shell differs from the installed CLI's")
 endif()
+# The installed CLI reads .vdb files through the installed reader program (libexec).
+run(${prefix}/bin/vdb_shell ${WORK_DIR}/horn.obj -r 32 -q --grids ${WORK_DIR}/horn.vdb)
+run(${prefix}/bin/vdb_shell ${WORK_DIR}/horn.vdb -r 32 -q -o ${WORK_DIR}/from_vdb.vtu)
+if(NOT EXISTS ${WORK_DIR}/from_vdb.vtu)
+  message(FATAL_ERROR "the installed CLI wrote no shell from a .vdb input")
+endif()
 # The installed Python module imports from the prefix alone.
 if(PYTHON)
   file(GLOB_RECURSE module ${prefix}/lib/python3/dist-packages/vdb_shell*.so)

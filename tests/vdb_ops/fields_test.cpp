@@ -4,10 +4,12 @@
 // [-0.5, 0.5]^3 (phi = max |x_i| - 0.5 inside; medial surface where the two largest |x_i| tie).
 // Shapes come from assets/shapes.h; fields are built once per shape at 128^3 and shared.
 #include <gtest/gtest.h>
+#include <stdlib.h>
 #include <tbb/global_control.h>
 
 #include <algorithm>
 #include <cmath>
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -526,6 +528,53 @@ TEST(FieldsVdb, CorruptFilesAreBadInputNotACrash) {
     }
   }
   EXPECT_GE(refused, 3u);  // at least the cut files
+}
+
+/// Sets VDB_SHELL_VDB_READER (the .vdb reader program) for its lifetime.
+class ReaderOverride {
+ public:
+  explicit ReaderOverride(const std::string& path) { ::setenv(kName, path.c_str(), 1); }
+  ~ReaderOverride() { ::unsetenv(kName); }
+
+ private:
+  static constexpr const char* kName = "VDB_SHELL_VDB_READER";
+};
+
+TEST(FieldsVdb, TheReaderProgramFailingIsReportedInOneLine) {
+  // The .vdb reader is a program of its own (vdb_shell_vdb_reader): one that crashes is a bad
+  // file named with the signal, and one that cannot be started is a resource error naming the
+  // fix. The file itself is sound: only the reader differs.
+  test::TempDir dir;
+  FieldOptions options;
+  options.resolution = 16;
+  const std::string good = dir.file("good.vdb");
+  write_grids(good, *build_fields(box_mesh(), options), {});
+  ASSERT_FALSE(volume_to_soup(good, "", 0.0, false).soup.polygons.empty());
+  const std::string crashing = dir.file("crashing_reader");
+  test::write_text(crashing, "#!/bin/sh\nkill -SEGV $$\n");
+  std::filesystem::permissions(crashing, std::filesystem::perms::owner_all);
+  {
+    ReaderOverride reader(crashing);
+    try {
+      volume_to_soup(good, "", 0.0, false);
+      ADD_FAILURE() << "a crashing reader went unnoticed";
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(good), std::string::npos) << what;
+      EXPECT_NE(what.find("signal " + std::to_string(SIGSEGV)), std::string::npos) << what;
+      EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    }
+  }
+  {
+    ReaderOverride reader(dir.file("no_such_reader"));
+    try {
+      volume_to_soup(good, "", 0.0, false);
+      ADD_FAILURE() << "a missing reader went unnoticed";
+    } catch (const ResourceError& e) {
+      EXPECT_NE(std::string(e.what()).find("VDB_SHELL_VDB_READER"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_FALSE(volume_to_soup(good, "", 0.0, false).soup.polygons.empty());
 }
 
 TEST(FieldsVdb, NarrowBandLevelSetGetsInteriorFilled) {

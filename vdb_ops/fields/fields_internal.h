@@ -148,17 +148,25 @@ void require_readable(const std::string& path);
 /// Picks the one grid to read from the metadata of a file's grids (returns its name).
 using GridSelector = std::function<std::string(const openvdb::GridPtrVec& metas)>;
 
-/// The grids of the .vdb file `path` — all of them, or the one `select` names — read by
-/// OpenVDB in a child process and handed back as OpenVDB's writer re-wrote them. OpenVDB 10's
-/// reader trusts the sizes stored in a file (a corrupt one overflows its buffers: the .vdb fuzz
-/// target found io::bloscFromStream copying a stored length into a node's buffer), so this
-/// process never parses the file's bytes itself, only what the writer made of the child's
-/// grids. A reader that crashes or throws takes only the child down.
-/// The child may map 64 times the file's size (at least 1 GiB) beyond what it inherits: a
-/// reader asking for more is reading sizes a corrupt file claims.
+/// The grids of the .vdb file `path` — all of them, or the one `select` names from their
+/// metadata — read by OpenVDB in the program vdb_shell_vdb_reader (vdb_reader_main()) and handed
+/// back as OpenVDB's writer re-wrote them. OpenVDB 10's reader trusts the sizes stored in a file
+/// (a corrupt one overflows its buffers: the .vdb fuzz target found io::bloscFromStream copying a
+/// stored length into a node's buffer), so this process never parses the file's bytes itself,
+/// only what the writer made of the reader's grids. A reader that crashes or throws takes only
+/// its own process down. It is a program started afresh, not a fork of this process: a fork's
+/// child runs without the parent's other threads, and a lock one of them held (TBB's, the
+/// heap's) would hang it.
+/// The reader may map 64 times the file's size (at least 1 GiB): one asking for more is reading
+/// sizes a corrupt file claims.
 /// \throw InputError naming the file (what the reader or `select` said, or how it failed);
-///        ResourceError if the child cannot be started.
+///        ResourceError if the reader cannot be found or started.
 openvdb::GridPtrVecPtr read_vdb_isolated(const std::string& path, const GridSelector& select);
+
+/// main() of vdb_shell_vdb_reader (vdb_reader_main.cpp): `--all FILE`, `--metadata FILE` or
+/// `--grid NAME FILE` writes those grids of FILE to stdout and exits with 0, or writes the error
+/// and exits with 2 (1 for bad arguments).
+int vdb_reader_main(int argc, char** argv);
 
 /// What mesh_volume() made: volumeToMesh's polygons (index lists into soup.points) and the same
 /// as polygons facing the other way (out of the region below the iso-value for a level set, out

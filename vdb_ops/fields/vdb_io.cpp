@@ -6,7 +6,9 @@
 #include <openvdb/io/Stream.h>
 #include <openvdb/tools/VolumeToMesh.h>
 
+#include <dlfcn.h>
 #include <fcntl.h>
+#include <spawn.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -14,6 +16,8 @@
 #include <algorithm>
 #include <cerrno>
 #include <csignal>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -21,6 +25,7 @@
 #include <map>
 #include <memory>
 #include <sstream>
+#include <vector>
 
 #include "core/base/errors.h"
 #include "core/read/load_surface.h"
@@ -228,12 +233,10 @@ bool write_all(int fd, const std::string& bytes) {
   return true;
 }
 
-/// The child's side of read_vdb_isolated(): reads, re-writes the grids onto `fd` and exits with
-/// 0, or writes an error message and exits with 2.
-/// The child's memory beyond what it already maps: sizes a corrupt file claims (a string of
+/// The helper's memory beyond what it maps at start: sizes a corrupt file claims (a string of
 /// 1.6 GB in a 75 kB file, found by the fuzz target) fail fast instead of being zeroed page by
 /// page. A sound .vdb holds its grids in a small multiple of its size.
-std::uintmax_t limit_child_memory(const std::string& path) {
+std::uintmax_t limit_reader_memory(const std::string& path) {
   std::error_code ec;
   const std::uintmax_t size = std::filesystem::file_size(path, ec);
   const std::uintmax_t allowance = std::max<std::uintmax_t>(std::uintmax_t{1} << 30, 64 * size);
@@ -247,71 +250,65 @@ std::uintmax_t limit_child_memory(const std::string& path) {
   return allowance;
 }
 
-[[noreturn]] void read_in_child(int fd, const std::string& path, const GridSelector& select) {
-  int code = 0;
-  std::string payload;
-  const std::uintmax_t allowance = limit_child_memory(path);
-  try {
-    // Nothing read is ever destroyed here (the file and the grids are left to _exit): OpenVDB
-    // frees trees with TBB parallel loops, and a forked child has none of its parent's TBB
-    // workers, so such a loop could wait for them forever (seen: 1 run in ~200 hung in
-    // io::File::close()).
-    auto* file = new openvdb::io::File(path);
-    file->open(false);
-    auto* grids = new openvdb::GridPtrVecPtr;
-    if (select) {
-      *grids = std::make_shared<openvdb::GridPtrVec>();
-      (*grids)->push_back(file->readGrid(select(*file->readAllGridMetadata())));
-    } else {
-      *grids = file->getGrids();
+/// How vdb_shell_vdb_reader is asked for grids (its first argument).
+constexpr const char* kAllGrids = "--all";
+constexpr const char* kMetadata = "--metadata";
+constexpr const char* kOneGrid = "--grid";  // followed by the grid's name
+constexpr const char* kReaderName = "vdb_shell_vdb_reader";
+
+/// Where vdb_shell_vdb_reader is: $VDB_SHELL_VDB_READER, else beside the code of this library (the
+/// build tree), else in its installed place relative to the library
+/// (VDB_SHELL_READER_FROM_LIBDIR: <libexecdir>/vdb_shell seen from <libdir>).
+/// \throw ResourceError naming the places looked at.
+std::string reader_path(const std::string& path) {
+  if (const char* env = std::getenv("VDB_SHELL_VDB_READER"); env && *env) return env;
+  std::string tried;
+  Dl_info info{};
+  if (::dladdr(reinterpret_cast<void*>(&reader_path), &info) != 0 && info.dli_fname) {
+    const std::filesystem::path dir = std::filesystem::path(info.dli_fname).parent_path();
+    for (const std::filesystem::path& p :
+         {dir / kReaderName, dir / VDB_SHELL_READER_FROM_LIBDIR / kReaderName}) {
+      if (::access(p.c_str(), X_OK) == 0) return p.string();
+      tried += (tried.empty() ? "'" : "', '") + p.lexically_normal().string();
     }
-    std::ostringstream out(std::ios::binary);
-    openvdb::io::Stream(out).write(**grids);
-    payload = out.str();
-  } catch (const InputError& e) {
-    code = 2;
-    payload = e.what();
-  } catch (const openvdb::Exception& e) {
-    code = 2;
-    payload = "cannot read '" + path + "' as a .vdb file: " + e.what();
-  } catch (const std::bad_alloc&) {
-    code = 2;
-    payload =
-        "cannot read '" + path + "' as a .vdb file: its reader asked for more than " +
-        std::to_string(allowance >> 20) +
-        " MiB (64 times the file's size, at least 1 GiB): the file is corrupt — fix: write it "
-        "again";
-  } catch (const std::exception& e) {
-    code = 2;
-    payload = "cannot read '" + path + "' as a .vdb file: " + e.what();
   }
-  write_all(fd, payload);
-  ::close(fd);
-  ::_exit(code);
+  throw ResourceError("cannot read '" + path + "': OpenVDB's reader runs in the program " +
+                      kReaderName + ", which is not at " +
+                      (tried.empty() ? std::string("any known place") : tried + "'") +
+                      " — fix: install vdb_shell again, or set VDB_SHELL_VDB_READER to its path");
 }
 
-}  // namespace
-
-openvdb::GridPtrVecPtr read_vdb_isolated(const std::string& path, const GridSelector& select) {
+/// Runs vdb_shell_vdb_reader on `path` with `args` and returns what it wrote: the grids as
+/// OpenVDB's writer wrote them.
+/// \throw InputError with the reader's message, or how it ended; ResourceError if it cannot run.
+std::string run_reader(const std::string& path, const std::vector<std::string>& args) {
+  const std::string helper = reader_path(path);
+  std::vector<std::string> words{helper};
+  words.insert(words.end(), args.begin(), args.end());
+  words.push_back(path);
+  std::vector<char*> argv;
+  for (std::string& w : words) argv.push_back(w.data());
+  argv.push_back(nullptr);
   int fds[2];
-  if (::pipe(fds) != 0)
+  if (::pipe2(fds, O_CLOEXEC) != 0)
     throw ResourceError("cannot read '" + path + "': no pipe (" + std::strerror(errno) + ")");
-  const pid_t pid = ::fork();
-  if (pid < 0) {
-    ::close(fds[0]);
-    ::close(fds[1]);
-    throw ResourceError("cannot read '" + path + "': cannot start a process (" +
-                        std::strerror(errno) + ")");
-  }
-  if (pid == 0) {
-    ::close(fds[0]);
-    // What a failing reader prints (glibc's heap checks, a sanitizer) is not the user's: the
-    // parent reports how the child ended in one line.
-    const int null = ::open("/dev/null", O_WRONLY);
-    if (null >= 0) ::dup2(null, STDERR_FILENO);
-    read_in_child(fds[1], path, select);
-  }
+  // What a failing reader prints (glibc's heap checks, a sanitizer) is not the user's: this
+  // process reports how the reader ended in one line.
+  posix_spawn_file_actions_t actions;
+  ::posix_spawn_file_actions_init(&actions);
+  ::posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
+  ::posix_spawn_file_actions_adddup2(&actions, fds[1], STDOUT_FILENO);
+  ::posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, "/dev/null", O_WRONLY, 0);
+  pid_t pid = 0;
+  const int spawned = ::posix_spawn(&pid, helper.c_str(), &actions, nullptr, argv.data(), environ);
+  ::posix_spawn_file_actions_destroy(&actions);
   ::close(fds[1]);
+  if (spawned != 0) {
+    ::close(fds[0]);
+    throw ResourceError("cannot read '" + path + "': cannot start its reader '" + helper + "' (" +
+                        std::strerror(spawned) +
+                        ") — fix: point VDB_SHELL_VDB_READER at vdb_shell_vdb_reader, or unset it");
+  }
   std::string payload;
   char buffer[1 << 16];
   for (;;) {
@@ -333,6 +330,12 @@ openvdb::GridPtrVecPtr read_vdb_isolated(const std::string& path, const GridSele
     throw InputError("cannot read '" + path + "' as a .vdb file: OpenVDB's reader failed on it (" +
                      how + "); the file is corrupt — fix: write it again");
   }
+  return payload;
+}
+
+/// The grids in `payload`, which OpenVDB's writer made in vdb_shell_vdb_reader.
+openvdb::GridPtrVecPtr grids_written_by_reader(const std::string& path,
+                                               const std::string& payload) {
   try {
     std::istringstream in(payload, std::ios::binary);
     return openvdb::io::Stream(in).getGrids();
@@ -340,6 +343,67 @@ openvdb::GridPtrVecPtr read_vdb_isolated(const std::string& path, const GridSele
     throw InternalError("reading '" + path + "': OpenVDB cannot read back its own copy (" +
                         e.what() + "); please report");
   }
+}
+
+}  // namespace
+
+int vdb_reader_main(int argc, char** argv) {
+  const std::string mode = argc > 2 ? argv[1] : "";
+  const bool one_grid = mode == kOneGrid;
+  if (argc != (one_grid ? 4 : 3) || (!one_grid && mode != kAllGrids && mode != kMetadata)) {
+    std::fprintf(stderr,
+                 "usage: %s --all FILE | --metadata FILE | --grid NAME FILE\n"
+                 "Writes the grids of the .vdb FILE (all, their metadata only, or the one named) "
+                 "to stdout as OpenVDB's writer writes them; on a bad file, writes the error and "
+                 "exits with 2. vdb_shell runs it to read .vdb files in a process of their own.\n",
+                 kReaderName);
+    return 1;
+  }
+  const std::string path = argv[argc - 1];
+  int code = 0;
+  std::string payload;
+  const std::uintmax_t allowance = limit_reader_memory(path);
+  try {
+    init_openvdb();
+    // Nothing read is destroyed (the file and the grids are left to _exit): freeing a large
+    // tree takes time the reader's caller waits for.
+    auto* file = new openvdb::io::File(path);
+    file->open(false);
+    auto* grids = new openvdb::GridPtrVecPtr;
+    if (mode == kAllGrids) {
+      *grids = file->getGrids();
+    } else if (mode == kMetadata) {
+      *grids = file->readAllGridMetadata();
+    } else {
+      *grids = std::make_shared<openvdb::GridPtrVec>();
+      (*grids)->push_back(file->readGrid(argv[2]));
+    }
+    std::ostringstream out(std::ios::binary);
+    openvdb::io::Stream(out).write(**grids);
+    payload = out.str();
+  } catch (const openvdb::Exception& e) {
+    code = 2;
+    payload = "cannot read '" + path + "' as a .vdb file: " + e.what();
+  } catch (const std::bad_alloc&) {
+    code = 2;
+    payload =
+        "cannot read '" + path + "' as a .vdb file: its reader asked for more than " +
+        std::to_string(allowance >> 20) +
+        " MiB (64 times the file's size, at least 1 GiB): the file is corrupt — fix: write it "
+        "again";
+  } catch (const std::exception& e) {
+    code = 2;
+    payload = "cannot read '" + path + "' as a .vdb file: " + e.what();
+  }
+  write_all(STDOUT_FILENO, payload);
+  ::_exit(code);  // (no exit handlers: a leak check would report the grids left alive)
+}
+
+openvdb::GridPtrVecPtr read_vdb_isolated(const std::string& path, const GridSelector& select) {
+  if (!select) return grids_written_by_reader(path, run_reader(path, {kAllGrids}));
+  const openvdb::GridPtrVecPtr metas = grids_written_by_reader(path, run_reader(path, {kMetadata}));
+  const std::string name = select(*metas);
+  return grids_written_by_reader(path, run_reader(path, {kOneGrid, name}));
 }
 
 void require_readable(const std::string& path) {
