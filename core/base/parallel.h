@@ -10,6 +10,7 @@
 #include <tbb/parallel_sort.h>
 
 #include <cstddef>
+#include <vector>
 
 #include "core/base/run_control.h"
 
@@ -41,6 +42,25 @@ void for_each_chunk(std::size_t n, const Body& body, std::size_t grain = 32) {
                       if (monitor) monitor->alive();
                       body(r.begin(), r.end());
                     });
+}
+
+/// combine() of item(i) over [0, n), starting from `zero`: blocks of 4096 items in parallel, each
+/// combined in index order, then the blocks in block order. The result depends only on n, not on
+/// the thread count, even where combine() is not associative (floating-point sums).
+template <class T, class Item, class Combine>
+T reduce_in_blocks(std::size_t n, const T& zero, const Item& item, const Combine& combine) {
+  constexpr std::size_t kBlock = 4096;
+  std::vector<T> part((n + kBlock - 1) / kBlock, zero);
+  for_each_index(
+      part.size(),
+      [&](std::size_t b) {
+        const std::size_t end = n < (b + 1) * kBlock ? n : (b + 1) * kBlock;
+        for (std::size_t i = b * kBlock; i < end; ++i) part[b] = combine(part[b], item(i));
+      },
+      2);
+  T all = zero;
+  for (const T& p : part) all = combine(all, p);
+  return all;
 }
 
 /// Sorts [begin, end) by operator< in parallel. Deterministic only for a strict total order

@@ -1,6 +1,7 @@
 // tet_grid.cpp — see tet_grid.h.
 #include "core/validity/tet_grid.h"
 
+#include <array>
 #include <cmath>
 #include <numeric>
 #include <utility>
@@ -123,25 +124,34 @@ long TetGrid::cell_of(double x, int axis) const {
 }
 
 BBox bounding_box_of(const std::vector<TetGeometry>& geo) {
-  BBox all;
-  for (const TetGeometry& g : geo) {
-    if (g.box.empty()) continue;
-    all.expand(g.box.lo);
-    all.expand(g.box.hi);
-  }
-  return all;
+  return reduce_in_blocks(
+      geo.size(), BBox{}, [&](std::size_t t) -> const BBox& { return geo[t].box; },
+      [](BBox all, const BBox& b) {
+        if (!b.empty()) {
+          all.expand(b.lo);
+          all.expand(b.hi);
+        }
+        return all;
+      });
 }
 
 double grid_cell_size(const std::vector<TetGeometry>& geo, const BBox& all) {
-  double n = 0.0;
-  for (const TetGeometry& g : geo) n += g.box.empty() ? 0.0 : 1.0;
-  double mean_volume = 0.0, mean_side = 0.0;
-  for (const TetGeometry& g : geo) {
-    if (g.box.empty()) continue;
-    mean_volume += std::abs(tet_volume(g.p[0], g.p[1], g.p[2], g.p[3])) / n;
-    const Vec3d e = g.box.extent();
-    mean_side += (e.x + e.y + e.z) / (3.0 * n);
-  }
+  // The tets' count, total volume and total mean side (boxes not empty).
+  const std::array<double, 3> sums = reduce_in_blocks(
+      geo.size(), std::array<double, 3>{0.0, 0.0, 0.0},
+      [&](std::size_t t) {
+        const TetGeometry& g = geo[t];
+        if (g.box.empty()) return std::array<double, 3>{0.0, 0.0, 0.0};
+        const Vec3d e = g.box.extent();
+        return std::array<double, 3>{1.0, std::abs(tet_volume(g.p[0], g.p[1], g.p[2], g.p[3])),
+                                     (e.x + e.y + e.z) / 3.0};
+      },
+      [](std::array<double, 3> a, const std::array<double, 3>& b) {
+        for (int k = 0; k < 3; ++k) a[k] += b[k];
+        return a;
+      });
+  const double n = sums[0];
+  const double mean_volume = n > 0.0 ? sums[1] / n : 0.0, mean_side = n > 0.0 ? sums[2] / n : 0.0;
   double h = std::max(1.5 * std::cbrt(mean_volume), mean_side / 8.0);
   if (!(h > 0.0)) h = all.max_side() > 0.0 ? all.max_side() : 1.0;
   const Vec3d ext = all.extent();
@@ -160,12 +170,15 @@ double grid_cell_size(const std::vector<TetGeometry>& geo, const BBox& all) {
   for (int round = 0; round < 200; ++round) {
     const double cells =
         std::ceil(ext.x / h + 1e-9) * std::ceil(ext.y / h + 1e-9) * std::ceil(ext.z / h + 1e-9);
-    double columns = 0.0;
-    for (const TetGeometry& g : geo) {
-      if (g.box.empty()) continue;
-      const Vec3d e = g.box.extent();
-      columns += (std::floor(e.x / h) + 2.0) * (std::floor(e.y / h) + 2.0);
-    }
+    const double columns = reduce_in_blocks(
+        geo.size(), 0.0,
+        [&](std::size_t t) {
+          const BBox& b = geo[t].box;
+          if (b.empty()) return 0.0;
+          const Vec3d e = b.extent();
+          return (std::floor(e.x / h) + 2.0) * (std::floor(e.y / h) + 2.0);
+        },
+        [](double a, double b) { return a + b; });
     if (cells <= 32.0 * n + 64.0 && columns <= 64.0 * n && mean_cells(h) <= 64.0) break;
     h *= 1.25;
   }

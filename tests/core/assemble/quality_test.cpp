@@ -3,9 +3,12 @@
 // unit cube's corner tet, the coverage of a cube shell, the histogram and its statistics.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <numeric>
+#include <random>
+#include <vector>
 
 #include "assets/shapes.h"
 #include "core/assemble/assemble.h"
@@ -88,6 +91,29 @@ TEST(Quality, HistogramBinsAndStatistics) {
   m.quality.clear();
   for (int i = 1; i <= 40; ++i) m.quality.push_back(0.01 * i);
   EXPECT_DOUBLE_EQ(summarize_quality(s, m).p5_quality, 0.03);
+}
+
+TEST(Quality, StatisticsAreThoseOfTheSortedQualities) {
+  // Shuffled qualities with repeats, odd and even counts (the median of an even count is the mean
+  // of the two middle values): against a sorted copy.
+  TetMesh m;
+  m.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  SurfaceMesh s;
+  std::mt19937 random(5);
+  for (const std::size_t count : {1, 2, 3, 20, 21, 1000, 1001, 4097}) {
+    m.tets.assign(count, {0, 1, 2, 3});
+    m.quality.clear();
+    std::uniform_int_distribution<int> value(-3, 40);
+    for (std::size_t t = 0; t < count; ++t) m.quality.push_back(0.025 * value(random));
+    std::vector<double> sorted = m.quality;
+    std::sort(sorted.begin(), sorted.end());
+    const QualitySummary q = summarize_quality(s, m);
+    EXPECT_EQ(q.min_quality, sorted.front()) << count;
+    EXPECT_EQ(q.p5_quality, sorted[count / 20]) << count;
+    const double median =
+        count % 2 == 1 ? sorted[count / 2] : 0.5 * (sorted[count / 2 - 1] + sorted[count / 2]);
+    EXPECT_EQ(q.median_quality, median) << count;
+  }
 }
 
 }  // namespace
