@@ -149,23 +149,25 @@ void require_readable(const std::string& path);
 using GridSelector = std::function<std::string(const openvdb::GridPtrVec& metas)>;
 
 /// The grids of the .vdb file `path` — all of them, or the one `select` names from their
-/// metadata — read by OpenVDB in the program vdb_shell_vdb_reader (vdb_reader_main()) and handed
-/// back as OpenVDB's writer re-wrote them. OpenVDB 10's reader trusts the sizes stored in a file
-/// (a corrupt one overflows its buffers: the .vdb fuzz target found io::bloscFromStream copying a
-/// stored length into a node's buffer), so this process never parses the file's bytes itself,
-/// only what the writer made of the reader's grids. A reader that crashes or throws takes only
-/// its own process down. It is a program started afresh, not a fork of this process: a fork's
-/// child runs without the parent's other threads, and a lock one of them held (TBB's, the
-/// heap's) would hang it.
+/// metadata — read by OpenVDB in the program vdb_shell_vdb_reader (vdb_reader_main()), one run
+/// of it per call, and handed back as OpenVDB's writer re-wrote them. OpenVDB 10's reader trusts
+/// the sizes stored in a file (a corrupt one overflows its buffers: the .vdb fuzz target found
+/// io::bloscFromStream copying a stored length into a node's buffer), so this process never
+/// parses the file's bytes itself, only what the writer made of the reader's grids. A reader
+/// that crashes or throws takes only its own process down. It is a program started afresh, not
+/// a fork of this process: a fork's child runs without the parent's other threads, and a lock
+/// one of them held (TBB's, the heap's) would hang it.
 /// The reader may map 64 times the file's size (at least 1 GiB): one asking for more is reading
 /// sizes a corrupt file claims.
 /// \throw InputError naming the file (what the reader or `select` said, or how it failed);
 ///        ResourceError if the reader cannot be found or started.
 openvdb::GridPtrVecPtr read_vdb_isolated(const std::string& path, const GridSelector& select);
 
-/// main() of vdb_shell_vdb_reader (vdb_reader_main.cpp): `--all FILE`, `--metadata FILE` or
-/// `--grid NAME FILE` writes those grids of FILE to stdout and exits with 0, or writes the error
-/// and exits with 2 (1 for bad arguments).
+/// main() of vdb_shell_vdb_reader (vdb_reader_main.cpp), which read_vdb_isolated() starts with
+/// a socket as its stdin and stdout: `--all FILE` replies with every grid of FILE; `--select FILE`
+/// with their metadata, then reads a grid's name and replies with that grid. A reply is a status
+/// byte (0: grids as OpenVDB's writer wrote them; 2: the error message, the last reply), the size
+/// of what follows (8 bytes) and that. Returns 1 for bad arguments.
 int vdb_reader_main(int argc, char** argv);
 
 /// What mesh_volume() made: volumeToMesh's polygons (index lists into soup.points) and the same

@@ -10,6 +10,7 @@
 #include <fcntl.h>
 #include <spawn.h>
 #include <sys/resource.h>
+#include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -250,11 +251,14 @@ std::uintmax_t limit_reader_memory(const std::string& path) {
   return allowance;
 }
 
-/// How vdb_shell_vdb_reader is asked for grids (its first argument).
+/// How vdb_shell_vdb_reader is asked for grids (its first argument): every grid of the file, or
+/// the grids' metadata first and then the one grid whose name it is sent.
 constexpr const char* kAllGrids = "--all";
-constexpr const char* kMetadata = "--metadata";
-constexpr const char* kOneGrid = "--grid";  // followed by the grid's name
+constexpr const char* kSelect = "--select";
 constexpr const char* kReaderName = "vdb_shell_vdb_reader";
+/// A reply of the reader: a status byte, then the size of what follows (8 bytes, native order).
+constexpr char kGrids = 0;  // OpenVDB's writer's stream of the grids
+constexpr char kError = 2;  // the error message, the read's end
 
 /// Where vdb_shell_vdb_reader is: $VDB_SHELL_VDB_READER, else beside the code of this library (the
 /// build tree), else in its installed place relative to the library
@@ -278,60 +282,107 @@ std::string reader_path(const std::string& path) {
                       " — fix: install vdb_shell again, or set VDB_SHELL_VDB_READER to its path");
 }
 
-/// Runs vdb_shell_vdb_reader on `path` with `args` and returns what it wrote: the grids as
-/// OpenVDB's writer wrote them.
-/// \throw InputError with the reader's message, or how it ended; ResourceError if it cannot run.
-std::string run_reader(const std::string& path, const std::vector<std::string>& args) {
-  const std::string helper = reader_path(path);
-  std::vector<std::string> words{helper};
-  words.insert(words.end(), args.begin(), args.end());
-  words.push_back(path);
-  std::vector<char*> argv;
-  for (std::string& w : words) argv.push_back(w.data());
-  argv.push_back(nullptr);
-  int fds[2];
-  if (::pipe2(fds, O_CLOEXEC) != 0)
-    throw ResourceError("cannot read '" + path + "': no pipe (" + std::strerror(errno) + ")");
-  // What a failing reader prints (glibc's heap checks, a sanitizer) is not the user's: this
-  // process reports how the reader ended in one line.
-  posix_spawn_file_actions_t actions;
-  ::posix_spawn_file_actions_init(&actions);
-  ::posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
-  ::posix_spawn_file_actions_adddup2(&actions, fds[1], STDOUT_FILENO);
-  ::posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, "/dev/null", O_WRONLY, 0);
-  pid_t pid = 0;
-  const int spawned = ::posix_spawn(&pid, helper.c_str(), &actions, nullptr, argv.data(), environ);
-  ::posix_spawn_file_actions_destroy(&actions);
-  ::close(fds[1]);
-  if (spawned != 0) {
-    ::close(fds[0]);
-    throw ResourceError("cannot read '" + path + "': cannot start its reader '" + helper + "' (" +
-                        std::strerror(spawned) +
-                        ") — fix: point VDB_SHELL_VDB_READER at vdb_shell_vdb_reader, or unset it");
-  }
-  std::string payload;
-  char buffer[1 << 16];
-  for (;;) {
-    const ssize_t n = ::read(fds[0], buffer, sizeof buffer);
+/// Reads exactly `size` bytes from `fd` into `out`; false at an early end.
+bool read_exactly(int fd, char* out, std::size_t size) {
+  for (std::size_t done = 0; done < size;) {
+    const ssize_t n = ::read(fd, out + done, size - done);
     if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) break;
-    payload.append(buffer, static_cast<std::size_t>(n));
+    if (n <= 0) return false;
+    done += static_cast<std::size_t>(n);
   }
-  ::close(fds[0]);
-  int status = 0;
-  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  return true;
+}
+
+/// One run of vdb_shell_vdb_reader on a file, talked to over a socket that is its stdin and
+/// stdout (a socket, so that a write to a reader that has ended fails instead of raising
+/// SIGPIPE here). The reader is waited for when the object goes.
+class ReaderProcess {
+ public:
+  ReaderProcess(const std::string& path, const char* mode) : path_(path) {
+    const std::string helper = reader_path(path);
+    std::vector<std::string> words{helper, mode, path};
+    std::vector<char*> argv;
+    for (std::string& w : words) argv.push_back(w.data());
+    argv.push_back(nullptr);
+    int fds[2];
+    if (::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, fds) != 0)
+      throw ResourceError("cannot read '" + path + "': no socket (" + std::strerror(errno) + ")");
+    // What a failing reader prints (glibc's heap checks, a sanitizer) is not the user's: this
+    // process reports how the reader ended in one line.
+    posix_spawn_file_actions_t actions;
+    ::posix_spawn_file_actions_init(&actions);
+    ::posix_spawn_file_actions_adddup2(&actions, fds[1], STDIN_FILENO);
+    ::posix_spawn_file_actions_adddup2(&actions, fds[1], STDOUT_FILENO);
+    ::posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, "/dev/null", O_WRONLY, 0);
+    const int spawned =
+        ::posix_spawn(&pid_, helper.c_str(), &actions, nullptr, argv.data(), environ);
+    ::posix_spawn_file_actions_destroy(&actions);
+    ::close(fds[1]);
+    if (spawned != 0) {
+      ::close(fds[0]);
+      throw ResourceError(
+          "cannot read '" + path + "': cannot start its reader '" + helper + "' (" +
+          std::strerror(spawned) +
+          ") — fix: point VDB_SHELL_VDB_READER at vdb_shell_vdb_reader, or unset it");
+    }
+    fd_ = fds[0];
   }
-  if (WIFEXITED(status) && WEXITSTATUS(status) == 2) throw InputError(payload);
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    const std::string how = WIFSIGNALED(status)
-                                ? "signal " + std::to_string(WTERMSIG(status)) + " (" +
-                                      std::string(strsignal(WTERMSIG(status))) + ")"
-                                : "exit code " + std::to_string(WEXITSTATUS(status));
-    throw InputError("cannot read '" + path + "' as a .vdb file: OpenVDB's reader failed on it (" +
+  ReaderProcess(const ReaderProcess&) = delete;
+  ReaderProcess& operator=(const ReaderProcess&) = delete;
+  ~ReaderProcess() { finish(); }
+
+  /// The reader's next reply: the grids it wrote.
+  /// \throw InputError with the reader's message, or naming how it ended.
+  std::string next() {
+    char status = 0;
+    std::uint64_t size = 0;
+    std::string payload;
+    const bool whole = read_exactly(fd_, &status, 1) &&
+                       read_exactly(fd_, reinterpret_cast<char*>(&size), sizeof size) &&
+                       (status == kGrids || status == kError) && size <= (std::uint64_t{1} << 40);
+    if (whole) {
+      payload.resize(size);
+      if (read_exactly(fd_, payload.data(), payload.size())) {
+        if (status == kGrids) return payload;
+        finish();
+        throw InputError(payload);
+      }
+    }
+    finish();
+    const std::string how = WIFSIGNALED(status_)
+                                ? "signal " + std::to_string(WTERMSIG(status_)) + " (" +
+                                      std::string(strsignal(WTERMSIG(status_))) + ")"
+                                : "exit code " + std::to_string(WEXITSTATUS(status_));
+    throw InputError("cannot read '" + path_ + "' as a .vdb file: OpenVDB's reader failed on it (" +
                      how + "); the file is corrupt — fix: write it again");
   }
-  return payload;
-}
+
+  /// Sends `line` (no newline in it) to the reader.
+  void send(const std::string& line) {
+    const std::string bytes = line + '\n';
+    for (std::size_t done = 0; done < bytes.size();) {
+      const ssize_t n = ::send(fd_, bytes.data() + done, bytes.size() - done, MSG_NOSIGNAL);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) return;  // the reader has ended: next() says how
+      done += static_cast<std::size_t>(n);
+    }
+  }
+
+ private:
+  /// Closes the socket (a reader waiting for a name ends) and waits for the reader.
+  void finish() {
+    if (fd_ < 0) return;
+    ::close(fd_);
+    fd_ = -1;
+    while (::waitpid(pid_, &status_, 0) < 0 && errno == EINTR) {
+    }
+  }
+
+  std::string path_;
+  pid_t pid_ = 0;
+  int fd_ = -1;
+  int status_ = 0;
+};
 
 /// The grids in `payload`, which OpenVDB's writer made in vdb_shell_vdb_reader.
 openvdb::GridPtrVecPtr grids_written_by_reader(const std::string& path,
@@ -345,65 +396,77 @@ openvdb::GridPtrVecPtr grids_written_by_reader(const std::string& path,
   }
 }
 
+/// Writes one reply of the reader to stdout; false when the caller has gone.
+bool reply(char status, const std::string& bytes) {
+  const std::uint64_t size = bytes.size();
+  return write_all(STDOUT_FILENO,
+                   std::string(1, status) +
+                       std::string(reinterpret_cast<const char*>(&size), sizeof size)) &&
+         write_all(STDOUT_FILENO, bytes);
+}
+
 }  // namespace
 
 int vdb_reader_main(int argc, char** argv) {
-  const std::string mode = argc > 2 ? argv[1] : "";
-  const bool one_grid = mode == kOneGrid;
-  if (argc != (one_grid ? 4 : 3) || (!one_grid && mode != kAllGrids && mode != kMetadata)) {
+  const std::string mode = argc == 3 ? argv[1] : "";
+  if (mode != kAllGrids && mode != kSelect) {
     std::fprintf(stderr,
-                 "usage: %s --all FILE | --metadata FILE | --grid NAME FILE\n"
-                 "Writes the grids of the .vdb FILE (all, their metadata only, or the one named) "
-                 "to stdout as OpenVDB's writer writes them; on a bad file, writes the error and "
-                 "exits with 2. vdb_shell runs it to read .vdb files in a process of their own.\n",
+                 "usage: %s --all FILE | --select FILE\n"
+                 "Reads the .vdb FILE for vdb_shell, which starts it: replies on stdout with the "
+                 "grids as OpenVDB's writer writes them (--all: every grid; --select: their "
+                 "metadata, then the grid whose name is read from stdin), or the error.\n",
                  kReaderName);
     return 1;
   }
-  const std::string path = argv[argc - 1];
-  int code = 0;
-  std::string payload;
+  const std::string path = argv[2];
   const std::uintmax_t allowance = limit_reader_memory(path);
+  const auto grids_bytes = [](const openvdb::GridPtrVec& grids) {
+    std::ostringstream out(std::ios::binary);
+    openvdb::io::Stream(out).write(grids);
+    return out.str();
+  };
   try {
     init_openvdb();
     // Nothing read is destroyed (the file and the grids are left to _exit): freeing a large
     // tree takes time the reader's caller waits for.
     auto* file = new openvdb::io::File(path);
     file->open(false);
-    auto* grids = new openvdb::GridPtrVecPtr;
-    if (mode == kAllGrids) {
-      *grids = file->getGrids();
-    } else if (mode == kMetadata) {
-      *grids = file->readAllGridMetadata();
-    } else {
-      *grids = std::make_shared<openvdb::GridPtrVec>();
-      (*grids)->push_back(file->readGrid(argv[2]));
+    auto* grids = new openvdb::GridPtrVecPtr(mode == kAllGrids ? file->getGrids()
+                                                               : file->readAllGridMetadata());
+    reply(kGrids, grids_bytes(**grids));
+    if (mode == kSelect) {
+      std::string name;
+      char c = 0;
+      for (;;) {
+        const ssize_t n = ::read(STDIN_FILENO, &c, 1);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) ::_exit(0);  // the caller chose none
+        if (c == '\n') break;
+        name += c;
+      }
+      auto* grid = new openvdb::GridPtrVec{file->readGrid(name)};
+      reply(kGrids, grids_bytes(*grid));
     }
-    std::ostringstream out(std::ios::binary);
-    openvdb::io::Stream(out).write(**grids);
-    payload = out.str();
   } catch (const openvdb::Exception& e) {
-    code = 2;
-    payload = "cannot read '" + path + "' as a .vdb file: " + e.what();
+    reply(kError, "cannot read '" + path + "' as a .vdb file: " + e.what());
   } catch (const std::bad_alloc&) {
-    code = 2;
-    payload =
-        "cannot read '" + path + "' as a .vdb file: its reader asked for more than " +
-        std::to_string(allowance >> 20) +
-        " MiB (64 times the file's size, at least 1 GiB): the file is corrupt — fix: write it "
-        "again";
+    reply(kError,
+          "cannot read '" + path + "' as a .vdb file: its reader asked for more than " +
+              std::to_string(allowance >> 20) +
+              " MiB (64 times the file's size, at least 1 GiB): the file is corrupt — fix: write "
+              "it again");
   } catch (const std::exception& e) {
-    code = 2;
-    payload = "cannot read '" + path + "' as a .vdb file: " + e.what();
+    reply(kError, "cannot read '" + path + "' as a .vdb file: " + e.what());
   }
-  write_all(STDOUT_FILENO, payload);
-  ::_exit(code);  // (no exit handlers: a leak check would report the grids left alive)
+  ::_exit(0);  // (no exit handlers: a leak check would report the grids left alive)
 }
 
 openvdb::GridPtrVecPtr read_vdb_isolated(const std::string& path, const GridSelector& select) {
-  if (!select) return grids_written_by_reader(path, run_reader(path, {kAllGrids}));
-  const openvdb::GridPtrVecPtr metas = grids_written_by_reader(path, run_reader(path, {kMetadata}));
-  const std::string name = select(*metas);
-  return grids_written_by_reader(path, run_reader(path, {kOneGrid, name}));
+  ReaderProcess reader(path, select ? kSelect : kAllGrids);
+  if (!select) return grids_written_by_reader(path, reader.next());
+  const std::string name = select(*grids_written_by_reader(path, reader.next()));
+  reader.send(name);
+  return grids_written_by_reader(path, reader.next());
 }
 
 void require_readable(const std::string& path) {
