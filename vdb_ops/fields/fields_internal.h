@@ -165,9 +165,10 @@ openvdb::GridPtrVecPtr read_vdb_isolated(const std::string& path, const GridSele
 
 /// main() of vdb_shell_vdb_reader (vdb_reader_main.cpp), which read_vdb_isolated() starts with
 /// a socket as its stdin and stdout: `--all FILE` replies with every grid of FILE; `--select FILE`
-/// with their metadata, then reads a grid's name and replies with that grid. A reply is a status
-/// byte (0: grids as OpenVDB's writer wrote them; 2: the error message, the last reply), the size
-/// of what follows (8 bytes) and that. Returns 1 for bad arguments.
+/// with their metadata, then reads a grid's name (its size in 8 bytes, then the name) and replies
+/// with that grid. A reply is a status byte (0: grids as OpenVDB's writer wrote them; 2: the
+/// error message, the last reply), the size of what follows (8 bytes) and that. Returns 1 for bad
+/// arguments.
 int vdb_reader_main(int argc, char** argv);
 
 /// What mesh_volume() made: volumeToMesh's polygons (index lists into soup.points) and the same

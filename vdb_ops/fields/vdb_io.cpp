@@ -357,9 +357,10 @@ class ReaderProcess {
                      how + "); the file is corrupt — fix: write it again");
   }
 
-  /// Sends `line` (no newline in it) to the reader.
-  void send(const std::string& line) {
-    const std::string bytes = line + '\n';
+  /// Sends `name` to the reader: its size (8 bytes, native order), then its bytes.
+  void send(const std::string& name) {
+    const std::uint64_t size = name.size();
+    const std::string bytes = std::string(reinterpret_cast<const char*>(&size), sizeof size) + name;
     for (std::size_t done = 0; done < bytes.size();) {
       const ssize_t n = ::send(fd_, bytes.data() + done, bytes.size() - done, MSG_NOSIGNAL);
       if (n < 0 && errno == EINTR) continue;
@@ -414,7 +415,7 @@ int vdb_reader_main(int argc, char** argv) {
                  "usage: %s --all FILE | --select FILE\n"
                  "Reads the .vdb FILE for vdb_shell, which starts it: replies on stdout with the "
                  "grids as OpenVDB's writer writes them (--all: every grid; --select: their "
-                 "metadata, then the grid whose name is read from stdin), or the error.\n",
+                 "metadata, then the grid whose name it reads from stdin), or the error.\n",
                  kReaderName);
     return 1;
   }
@@ -435,15 +436,12 @@ int vdb_reader_main(int argc, char** argv) {
                                                                : file->readAllGridMetadata());
     reply(kGrids, grids_bytes(**grids));
     if (mode == kSelect) {
-      std::string name;
-      char c = 0;
-      for (;;) {
-        const ssize_t n = ::read(STDIN_FILENO, &c, 1);
-        if (n < 0 && errno == EINTR) continue;
-        if (n <= 0) ::_exit(0);  // the caller chose none
-        if (c == '\n') break;
-        name += c;
-      }
+      std::uint64_t size = 0;
+      if (!read_exactly(STDIN_FILENO, reinterpret_cast<char*>(&size), sizeof size) ||
+          size > (std::uint64_t{1} << 20))
+        ::_exit(0);  // the caller chose none
+      std::string name(size, '\0');
+      if (!read_exactly(STDIN_FILENO, name.data(), name.size())) ::_exit(0);
       auto* grid = new openvdb::GridPtrVec{file->readGrid(name)};
       reply(kGrids, grids_bytes(*grid));
     }
