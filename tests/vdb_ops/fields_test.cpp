@@ -493,16 +493,22 @@ TEST(FieldsVdb, RejectsBadLevelSets) {
   EXPECT_THROW(fields_from_level_set(junk, "", box_mesh(), options), InputError);
 }
 
+/// The box's grids at 16^3, written to `dir`/good.vdb; returns that path.
+std::string write_box_grids(const test::TempDir& dir) {
+  FieldOptions options;
+  options.resolution = 16;
+  const std::string path = dir.file("good.vdb");
+  write_grids(path, *build_fields(box_mesh(), options), {});
+  return path;
+}
+
 TEST(FieldsVdb, CorruptFilesAreBadInputNotACrash) {
   // A level set file cut short at several places, one with its bytes flipped, and the inputs
   // the .vdb fuzz target found (tests/fuzz/regressions/vdb: OpenVDB's reader overflows a
   // buffer on them): each is an InputError naming the file, or (where the damage left a
   // readable grid) a surface; the process survives every one.
   test::TempDir dir;
-  FieldOptions options;
-  options.resolution = 16;
-  const std::string good = dir.file("good.vdb");
-  write_grids(good, *build_fields(box_mesh(), options), {});
+  const std::string good = write_box_grids(dir);
   std::ifstream in(good, std::ios::binary);
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   std::vector<std::string> cases;
@@ -545,10 +551,7 @@ TEST(FieldsVdb, TheReaderProgramFailingIsReportedInOneLine) {
   // file named with the signal, and one that cannot be started is a resource error naming the
   // fix. The file itself is sound: only the reader differs.
   test::TempDir dir;
-  FieldOptions options;
-  options.resolution = 16;
-  const std::string good = dir.file("good.vdb");
-  write_grids(good, *build_fields(box_mesh(), options), {});
+  const std::string good = write_box_grids(dir);
   ASSERT_FALSE(volume_to_soup(good, "", 0.0, false).soup.polygons.empty());
   const std::string crashing = dir.file("crashing_reader");
   test::write_text(crashing, "#!/bin/sh\nkill -SEGV $$\n");
