@@ -63,16 +63,9 @@ const SplitTable& split_table() {
   return table;
 }
 
-}  // namespace
-
-PrismTets split_prism(const std::array<std::uint32_t, 6>& ids) {
-  int m = 0;
-  for (int k = 1; k < 6; ++k)
-    if (ids[k] < ids[m]) m = k;
-  const std::uint32_t v2 = ids[corner_role(m, 1)], v3 = ids[corner_role(m, 2)];
-  const std::uint32_t v5 = ids[corner_role(m, 4)], v6 = ids[corner_role(m, 5)];
-  const int cut = std::min(v2, v6) < std::min(v3, v5) ? 0 : 1;
-
+// The tets of split_table().splits[m][cut] with the corners `ids`, without those with a repeated
+// index.
+PrismTets split_from_table(const std::array<std::uint32_t, 6>& ids, int m, int cut) {
   PrismTets out;
   for (const LocalTet& lt : split_table().splits[m][cut]) {
     const Tet t = {ids[lt[0]], ids[lt[1]], ids[lt[2]], ids[lt[3]]};
@@ -84,6 +77,46 @@ PrismTets split_prism(const std::array<std::uint32_t, 6>& ids) {
       ++out.dropped;
   }
   return out;
+}
+
+}  // namespace
+
+PrismTets split_prism(const std::array<std::uint32_t, 6>& ids) {
+  int m = 0;
+  for (int k = 1; k < 6; ++k)
+    if (ids[k] < ids[m]) m = k;
+  const std::uint32_t v2 = ids[corner_role(m, 1)], v3 = ids[corner_role(m, 2)];
+  const std::uint32_t v5 = ids[corner_role(m, 4)], v6 = ids[corner_role(m, 5)];
+  return split_from_table(ids, m, std::min(v2, v6) < std::min(v3, v5) ? 0 : 1);
+}
+
+int prism_cuts(const std::array<std::uint32_t, 6>& ids) {
+  int cuts = 0;
+  for (int i = 0; i < 3; ++i) {  // the quad is cut through its smallest corner
+    const int j = (i + 1) % 3;
+    if (std::min(ids[i], ids[3 + j]) < std::min(ids[j], ids[3 + i])) cuts |= 1 << i;
+  }
+  return cuts;
+}
+
+PrismTets split_prism_cut(const std::array<std::uint32_t, 6>& ids, int cuts) {
+  const auto bit = [&](int i) { return (cuts >> ((i + 3) % 3)) & 1; };
+  // V1: a corner where two cuts meet. Outer corner j is on the cut of quad j when bit j is set
+  // and on that of quad j - 1 when bit j - 1 is clear; inner corner j' the other way round.
+  // Two corners qualify; the smaller id, as split_prism() picks it, gives the same tet order.
+  int m = -1;
+  for (int j = 0; j < 3; ++j)
+    if (bit(j) != bit(j - 1)) {
+      const int c = bit(j) ? j : 3 + j;
+      if (m < 0 || ids[c] < ids[m]) m = c;
+    }
+  if (m < 0)
+    throw InternalError("split_prism_cut: the cuts " + std::to_string(cuts) +
+                        " form a cycle; no 3-tet split follows them");
+  // The third quad, (V2, V3, V6, V5), is quad (m + 1) mod 3: its bit set cuts it from outer
+  // corner (m + 1) mod 3 — V2 when V1 is outer (cut 0: V2-V6), V5 when inner (cut 1: V3-V5).
+  const int third = bit(m % 3 + 1);
+  return split_from_table(ids, m, m < 3 ? 1 - third : third);
 }
 
 std::vector<double> layer_fractions(int layers, double ratio) {

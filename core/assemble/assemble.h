@@ -102,6 +102,23 @@ struct PrismTets {
 /// conventions. Tets with a repeated index are dropped.
 PrismTets split_prism(const std::array<std::uint32_t, 6>& ids);
 
+/// The cuts of a prism's side quads as a 3-bit mask: quad i has the corners i, i + 1 (mod 3) of
+/// the outer triangle and their inner vertices; bit i is set when the quad is cut along
+/// (i, (i + 1)'), from its outer corner i, and clear when along (i + 1, i'). The masks 0 and 7
+/// cut the three quads in a cycle, which no 3-tet split follows; the other six each have one.
+/// Two prisms sharing a quad cut it alike when their bits for it differ (each sees it the other
+/// way round).
+inline constexpr int kCyclicCuts[2] = {0, 7};
+
+/// The cuts split_prism() makes (the global-index rule). \pre the six ids are distinct.
+int prism_cuts(const std::array<std::uint32_t, 6>& ids);
+
+/// Splits the prism `ids` (as split_prism()) into the 3 tets that cut its side quads as `cuts`
+/// says; split_prism_cut(ids, prism_cuts(ids)) == split_prism(ids). Optimisation
+/// (core/validity/optimize.h) chooses other cuts where they give better tets.
+/// \pre the six ids are distinct and cuts is not one of kCyclicCuts.
+PrismTets split_prism_cut(const std::array<std::uint32_t, 6>& ids, int cuts);
+
 /// Splits the prism with corner ids `levels` cut into layers: levels[3 k + i] is corner i of
 /// layer boundary k (k = 0: the outer triangle a, b, c; k = layers: a', b', c'; a corner on the
 /// surface repeats its id at every level). Layer k + 1 is the prism between boundaries k and

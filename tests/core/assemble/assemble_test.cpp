@@ -1,8 +1,8 @@
 // assemble_test.cpp — assemble_shell() and split_prism() (core/assemble/assemble.h): the prism
-// split (all 720 index orders, welding), whole shells on closed surfaces (conformity,
-// orientation, boundary faces, T == 3F), surface vertices and cap faces, layers through the
-// thickness (T == 3KF, layer points on the side edges, conformity layer by layer), inconsistent
-// input.
+// split (all 720 index orders, welding, every acyclic choice of cuts), whole shells on closed
+// surfaces (conformity, orientation, boundary faces, T == 3F), surface vertices and cap faces,
+// layers through the thickness (T == 3KF, layer points on the side edges, conformity layer by
+// layer), inconsistent input.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -165,6 +165,64 @@ TEST(Assemble, SplitPrismEveryIndexOrder) {
       with_outer += s.count(ids[0]) && s.count(ids[1]) && s.count(ids[2]);
     }
     EXPECT_EQ(with_outer, 1);
+  } while (std::next_permutation(ids.begin(), ids.end()));
+  EXPECT_EQ(orders, 720);
+}
+
+TEST(Assemble, SplitPrismCutFollowsEveryAcyclicCut) {
+  // The prism of SplitPrismEveryIndexOrder (planar sides: every cut is a valid split).
+  const std::array<Vec3d, 3> outer = {Vec3d{0, 0, 0}, Vec3d{1, 0, 0}, Vec3d{0.2, 1, 0}};
+  const Vec3d apex{0.3, 0.4, -2.0};
+  std::array<Vec3d, 6> corner;
+  for (int k = 0; k < 3; ++k) {
+    corner[k] = outer[k];
+    corner[k + 3] = apex + (outer[k] - apex) * 0.6;
+  }
+  const double prism_volume =
+      tet_volume(outer[0], outer[2], outer[1], apex) * (1.0 - 0.6 * 0.6 * 0.6);
+  std::array<std::uint32_t, 6> ids = {10, 11, 12, 13, 14, 15};
+  int orders = 0;
+  do {
+    ++orders;
+    // The global-index rule's cuts give split_prism()'s tets.
+    const PrismTets rule = split_prism(ids);
+    const int rule_cuts = prism_cuts(ids);
+    ASSERT_NE(rule_cuts, kCyclicCuts[0]);
+    ASSERT_NE(rule_cuts, kCyclicCuts[1]);
+    const PrismTets same = split_prism_cut(ids, rule_cuts);
+    ASSERT_EQ(same.count, 3);
+    EXPECT_TRUE(std::equal(same.tets.begin(), same.tets.end(), rule.tets.begin()));
+    std::map<std::uint32_t, Vec3d> at;
+    for (int k = 0; k < 6; ++k) at[ids[k]] = corner[k];
+    for (int cuts = 1; cuts < 7; ++cuts) {
+      const PrismTets split = split_prism_cut(ids, cuts);
+      ASSERT_EQ(split.count, 3);
+      double sum = 0;
+      std::set<std::pair<std::uint32_t, std::uint32_t>> edges;
+      for (const Tet& tet : split.tets) {
+        const double v = tet_volume(at[tet[0]], at[tet[1]], at[tet[2]], at[tet[3]]);
+        EXPECT_GT(v, 0.0) << cuts;
+        sum += v;
+        for (int i = 0; i < 4; ++i)
+          for (int j = i + 1; j < 4; ++j)
+            edges.insert({std::min(tet[i], tet[j]), std::max(tet[i], tet[j])});
+      }
+      EXPECT_NEAR(sum, prism_volume, 1e-12) << cuts;
+      // Quad k is cut along (k, (k + 1)') when bit k is set, else along (k + 1, k').
+      for (int k = 0; k < 3; ++k) {
+        const int j = (k + 1) % 3;
+        std::pair<std::uint32_t, std::uint32_t> cut = {ids[k], ids[3 + j]},
+                                                other = {ids[j], ids[3 + k]};
+        if (!((cuts >> k) & 1)) std::swap(cut, other);
+        EXPECT_TRUE(edges.count({std::min(cut.first, cut.second), std::max(cut.first, cut.second)}))
+            << cuts << " quad " << k;
+        EXPECT_FALSE(
+            edges.count({std::min(other.first, other.second), std::max(other.first, other.second)}))
+            << cuts << " quad " << k;
+      }
+    }
+    EXPECT_THROW(split_prism_cut(ids, 0), InternalError);
+    EXPECT_THROW(split_prism_cut(ids, 7), InternalError);
   } while (std::next_permutation(ids.begin(), ids.end()));
   EXPECT_EQ(orders, 720);
 }
