@@ -18,8 +18,12 @@ double tet_quality(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& 
   return 6.0 * std::sqrt(2.0) * tet_volume(a, b, c, d) / (l_rms * l_rms * l_rms);
 }
 
-std::array<double, 6> tet_dihedrals_deg(const Vec3d& a, const Vec3d& b, const Vec3d& c,
-                                        const Vec3d& d) {
+namespace {
+
+// The cosines of the six dihedral angles of (a, b, c, d), in kTetEdge order; false for a flat
+// tet (a face without area).
+bool tet_dihedral_cosines(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d,
+                          std::array<double, 6>& cosines) {
   // n[k]: normal of the face opposite corner k, pointing away from corner k.
   const std::array<Vec3d, 4> p = {a, b, c, d};
   std::array<Vec3d, 4> n;
@@ -30,25 +34,36 @@ std::array<double, 6> tet_dihedrals_deg(const Vec3d& a, const Vec3d& b, const Ve
     Vec3d m = cross(v - u, w - u);
     if (dot(m, p[k] - u) > 0.0) m = -m;
     const double len = norm(m);
-    if (!(len > 0.0)) return {};
+    if (!(len > 0.0)) return false;
     n[k] = m / len;
   }
   // The dihedral angle at the edge shared by the faces opposite k and l is pi minus the angle
   // between their outward normals; edge e of kTetEdge joins corners i and j, so its faces are
   // the ones opposite the other two corners.
-  std::array<double, 6> angles;
   for (int e = 0; e < 6; ++e) {
     int k = -1, l = -1;
     for (int m = 0; m < 4; ++m)
       if (m != kTetEdge[e][0] && m != kTetEdge[e][1]) (k < 0 ? k : l) = m;
-    angles[e] = std::acos(std::clamp(-dot(n[k], n[l]), -1.0, 1.0)) * 180.0 / kPi;
+    cosines[e] = std::clamp(-dot(n[k], n[l]), -1.0, 1.0);
   }
+  return true;
+}
+
+}  // namespace
+
+std::array<double, 6> tet_dihedrals_deg(const Vec3d& a, const Vec3d& b, const Vec3d& c,
+                                        const Vec3d& d) {
+  std::array<double, 6> angles;
+  if (!tet_dihedral_cosines(a, b, c, d, angles)) return {};
+  for (double& x : angles) x = std::acos(x) * 180.0 / kPi;
   return angles;
 }
 
 double tet_min_dihedral_deg(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
-  const std::array<double, 6> angles = tet_dihedrals_deg(a, b, c, d);
-  return *std::min_element(angles.begin(), angles.end());
+  std::array<double, 6> cosines;
+  if (!tet_dihedral_cosines(a, b, c, d, cosines)) return 0.0;
+  // The smallest angle has the largest cosine (acos falls): one acos, the same value.
+  return std::acos(*std::max_element(cosines.begin(), cosines.end())) * 180.0 / kPi;
 }
 
 std::vector<double> tet_qualities(const TetMesh& mesh) {
