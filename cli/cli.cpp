@@ -610,11 +610,17 @@ void register_options(CLI::App& app, CliOptions& opt) {
   CLI::Option* optimize =
       app.add_flag("--optimize", opt.shell.optimize.enabled,
                    "After the validity search, move inner vertices (never outward, within the "
-                   "thickness limits) to raise the worst tets' quality and smallest dihedral angle")
+                   "thickness limits) and cut prisms' side quads the other way to raise the worst "
+                   "tets' quality and smallest dihedral angle (the default)")
           ->group(th);
+  app.add_option("--max-coverage-loss", opt.shell.optimize.max_coverage_loss,
+                 "Coverage the optimisation's moves may cost in all, as a fraction of the "
+                 "enclosed volume (more lets them raise the worst tets further)")
+      ->check(CLI::Range(0.0, 0.1))
+      ->group(th);
   app.add_flag_callback(
          "--no-optimize", [&opt] { opt.shell.optimize.enabled = false; },
-         "Do not optimise (the default)")
+         "Do not optimise: the shell as the validity search leaves it")
       ->excludes(optimize)
       ->group(th);
 

@@ -501,11 +501,12 @@ std::string report_html(const ShellResult& r, const ReportFiles& files, double r
       const OptimizeSummary& o = r.optimize;
       h << row("optimised (--optimize)",
                count_of(o.report.moved_vertices) + " inner vertices moved in " +
-                   std::to_string(o.report.sweeps) + " sweeps: quality p5 " +
-                   num(o.p5_quality_before, 3) + " to " + num(r.quality.p5_quality, 3) +
-                   ", min dihedral " + num(o.min_dihedral_deg_before, 3) + " to " +
-                   num(r.quality.min_dihedral_deg, 3) + " degrees, coverage " +
-                   num(o.coverage_before, 4) + " to " + num(r.quality.coverage, 4));
+                   std::to_string(o.report.sweeps) + " sweeps, " + count_of(o.report.recut_quads) +
+                   " side quads cut the other way: quality p5 " + num(o.p5_quality_before, 3) +
+                   " to " + num(r.quality.p5_quality, 3) + ", min dihedral " +
+                   num(o.min_dihedral_deg_before, 3) + " to " + num(r.quality.min_dihedral_deg, 3) +
+                   " degrees, coverage " + num(o.coverage_before, 4) + " to " +
+                   num(r.quality.coverage, 4));
     }
     h << row("cap faces / floor drops", count_of(v.cap_faces) + " / " + count_of(v.floor_drops));
     h << "</table></div>\n";

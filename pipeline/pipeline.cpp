@@ -331,15 +331,17 @@ ShellResult run(const LoadedSurface& surface, const ShellOptions& options,
             ? "give a surface with fewer faces, or raise --max-memory"
             : "lower --resolution or raise --step (shorter traces), or give a surface with fewer "
               "faces, or raise --max-memory");
-    ValidShell valid = make_valid_shell(work, work_traces, inner, options.validity, monitor);
-    if (options.optimize.enabled && valid.checks.valid()) {
+    const auto optimize = [&](ValidShell& valid, ShellChecker& checker) {
+      if (!options.optimize.enabled) return;
       const QualitySummary before = summarize_quality(work, valid.shell.mesh);
       r.optimize.min_quality_before = before.min_quality;
       r.optimize.p5_quality_before = before.p5_quality;
       r.optimize.min_dihedral_deg_before = before.min_dihedral_deg;
       r.optimize.coverage_before = before.coverage;
-      r.optimize.report = optimize_shell(work, inner.limit, valid, options.optimize);
-    }
+      r.optimize.report = optimize_shell(work, inner.limit, valid, options.optimize, checker);
+    };
+    ValidShell valid =
+        make_valid_shell(work, work_traces, inner, options.validity, monitor, optimize);
     if (valid.checks.valid() && !split.empty()) {
       const SectorShell sectors = join_sectors(mesh, split, valid, options.validity.min_quality);
       r.validity.gap_tets = sectors.gap_tets;
@@ -401,6 +403,8 @@ void check_options(const ShellOptions& o) {
   require(std::isfinite(o.validity.layer_ratio) && o.validity.layer_ratio >= 0.1 &&
               o.validity.layer_ratio <= 10,
           "--layer-ratio", o.validity.layer_ratio, "must be in [0.1, 10]");
+  require(o.optimize.max_coverage_loss >= 0 && o.optimize.max_coverage_loss <= 0.1,
+          "--max-coverage-loss", o.optimize.max_coverage_loss, "must be in [0, 0.1]");
   require(o.adaptivity >= 0 && o.adaptivity <= 1, "--adaptivity", o.adaptivity,
           "must be in [0, 1]");
   require(o.threads >= 0, "--threads", o.threads, "must be >= 0 (0: all cores)");
@@ -626,10 +630,13 @@ std::string report_json(const ShellResult& r, const ReportFiles& files, double r
                     {"histogram", q.histogram}};
     const OptimizeSummary& o = r.optimize;
     j["optimize"] = {{"enabled", r.options.optimize.enabled},
+                     {"max_coverage_loss", r.options.optimize.max_coverage_loss},
                      {"sweeps", o.report.sweeps},
                      {"checks", o.report.checks},
                      {"moved_vertices", o.report.moved_vertices},
                      {"reverted_moves", o.report.reverted},
+                     {"recut_quads", o.report.recut_quads},
+                     {"reverted_cuts", o.report.reverted_cuts},
                      {"min_quality_before", o.min_quality_before},
                      {"p5_before", o.p5_quality_before},
                      {"min_dihedral_deg_before", o.min_dihedral_deg_before},

@@ -226,9 +226,16 @@ const std::vector<OptionSpec>& option_specs() {
        [](ShellOptions& o, py::handle v, const char* n) { o.adaptivity = to_float(v, n); },
        [](const ShellOptions& o) { return number_text(o.adaptivity); }},
       {"optimize", "--optimize",
-       "after the validity search, move inner vertices to raise the worst tets' quality",
+       "after the validity search, move inner vertices and recut prism sides to raise the worst "
+       "tets' quality (default True)",
        [](ShellOptions& o, py::handle v, const char* n) { o.optimize.enabled = to_bool(v, n); },
        [](const ShellOptions& o) { return std::string(o.optimize.enabled ? "True" : "False"); }},
+      {"max_coverage_loss", "--max-coverage-loss",
+       "optimize: coverage its moves may cost in all (fraction of the enclosed volume)",
+       [](ShellOptions& o, py::handle v, const char* n) {
+         o.optimize.max_coverage_loss = to_float(v, n);
+       },
+       [](const ShellOptions& o) { return number_text(o.optimize.max_coverage_loss); }},
       {"repair", "--repair",
        "rebuild the surface watertight through a volume first (report['repair'] says how)",
        [](ShellOptions& o, py::handle v, const char* n) { o.repair = to_bool(v, n); },

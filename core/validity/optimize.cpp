@@ -1,11 +1,14 @@
 #include "core/validity/optimize.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <tuple>
 
+#include "core/assemble/assemble.h"
 #include "core/assemble/quality.h"
 #include "core/base/index_lists.h"
 #include "core/validity/shell_checks.h"
@@ -20,6 +23,20 @@ struct Worst {
   double quality = std::numeric_limits<double>::infinity();
   double dihedral = std::numeric_limits<double>::infinity();
   double volume = 0;  ///< of all the tets around the point
+  /// Takes in the tets [begin, end): indices into mesh.tets, or tets.
+  template <class It>
+  void add(const TetMesh& mesh, It begin, It end) {
+    for (; begin != end; ++begin) {
+      const Tet& tet = tet_of(mesh, *begin);
+      const Vec3d &a = mesh.points[tet[0]], &b = mesh.points[tet[1]], &c = mesh.points[tet[2]],
+                  &d = mesh.points[tet[3]];
+      quality = std::min(quality, tet_quality(a, b, c, d));
+      dihedral = std::min(dihedral, tet_min_dihedral_deg(a, b, c, d));
+      volume += tet_volume(a, b, c, d);
+    }
+  }
+  static const Tet& tet_of(const TetMesh& mesh, std::uint32_t t) { return mesh.tets[t]; }
+  static const Tet& tet_of(const TetMesh&, const Tet& tet) { return tet; }
   /// Neither measure lower than `o`'s and one of them higher: the shell's smallest ratio and
   /// smallest angle can then only rise.
   bool improves_on(const Worst& o) const {
@@ -28,20 +45,6 @@ struct Worst {
            (quality > o.quality * (1 + 1e-6) + 1e-12 || dihedral > o.dihedral * (1 + 1e-6) + 1e-9);
   }
 };
-
-/// Worst of the tets `ring`.
-Worst worst_of(const TetMesh& mesh, IndexLists::Range ring) {
-  Worst w;
-  for (const std::uint32_t t : ring) {
-    const Tet& tet = mesh.tets[t];
-    const Vec3d &a = mesh.points[tet[0]], &b = mesh.points[tet[1]], &c = mesh.points[tet[2]],
-                &d = mesh.points[tet[3]];
-    w.quality = std::min(w.quality, tet_quality(a, b, c, d));
-    w.dihedral = std::min(w.dihedral, tet_min_dihedral_deg(a, b, c, d));
-    w.volume += tet_volume(a, b, c, d);
-  }
-  return w;
-}
 
 /// The layer points of a layered shell (assemble.h): each moves with an inner point, on the
 /// straight edge from its surface vertex, at a fixed fraction of it.
@@ -72,12 +75,101 @@ LayerPoints layer_points(const SurfaceMesh& surface, const ShellInput& input,
   return lp;
 }
 
+/// One prism of one layer whose side quads may be cut otherwise: its six distinct corners (as
+/// split_prism() takes them), its cuts (assemble.h) and its 3 tets, mesh.tets[first_tet, + 3).
+struct CutPrism {
+  std::array<std::uint32_t, 6> ids;
+  std::uint32_t first_tet;
+  int cuts;
+};
+
+/// A side quad between two CutPrisms: quad side[k] of prism[k].
+struct Quad {
+  std::array<std::uint32_t, 2> prism;
+  std::array<int, 2> side;
+};
+
+bool is_cyclic(int cuts) { return cuts == kCyclicCuts[0] || cuts == kCyclicCuts[1]; }
+
+struct CutPrisms {
+  std::vector<CutPrism> prisms;
+  std::vector<Quad> quads;
+};
+
+/// The prisms of the shell `mesh` (assemble_shell() of surface and input) whose 3 tets are
+/// those of the global-index rule on six distinct corners, layer by layer, and the quads two such
+/// prisms share. Prisms with welded or on-surface corners and cap tets are left out, and so are
+/// the quads they touch.
+CutPrisms cut_prisms(const SurfaceMesh& surface, const ShellInput& input, int layers,
+                     const TetMesh& mesh) {
+  const std::size_t n = surface.points.size(), K = static_cast<std::size_t>(layers);
+  // level[(K + 1) v + k]: vertex v's point on layer boundary k (0 the surface, K the inner one).
+  std::vector<std::uint32_t> level((K + 1) * n);
+  auto next = static_cast<std::uint32_t>(first_layer_point(surface, input));
+  for (std::uint32_t v = 0; v < n; ++v) {
+    const std::uint32_t i = input.inner_id[v];
+    for (std::size_t k = 0; k <= K; ++k)
+      level[(K + 1) * v + k] = i == kOnSurface ? v
+                               : k == 0        ? v
+                               : k == K        ? static_cast<std::uint32_t>(n + i)
+                                               : next++;
+  }
+  std::vector<std::uint32_t> first(surface.triangles.size() + 1, 0);
+  for (const std::uint32_t f : mesh.source_triangle) ++first[f + 1];
+  for (std::size_t f = 0; f < surface.triangles.size(); ++f) first[f + 1] += first[f];
+
+  CutPrisms out;
+  for (std::uint32_t f = 0; f < surface.triangles.size(); ++f) {
+    const Triangle& tri = surface.triangles[f];
+    std::uint32_t t = first[f];
+    for (std::size_t k = 0; k < K; ++k) {
+      std::array<std::uint32_t, 6> ids{};
+      for (int c = 0; c < 3; ++c) {
+        ids[c] = level[(K + 1) * tri[c] + k];
+        ids[3 + c] = level[(K + 1) * tri[c] + k + 1];
+      }
+      const PrismTets split = split_prism(ids);
+      const auto layer_of = [&](std::uint32_t u) {
+        return mesh.layer.empty() ? std::size_t(1) : std::size_t(mesh.layer[u]);
+      };
+      const std::uint32_t begin = t;
+      while (t < first[f + 1] && layer_of(t) == k + 1) ++t;
+      if (split.count != 3 || t - begin != 3 ||
+          !std::equal(split.tets.begin(), split.tets.end(), mesh.tets.begin() + begin))
+        continue;
+      out.prisms.push_back({ids, begin, prism_cuts(ids)});
+    }
+  }
+  // The quads, found by their outer edge: (edge key, prism, side), sorted.
+  std::vector<std::tuple<std::uint64_t, std::uint32_t, int>> sides;
+  for (std::uint32_t p = 0; p < out.prisms.size(); ++p)
+    for (int i = 0; i < 3; ++i) {
+      const std::uint32_t a = out.prisms[p].ids[i], b = out.prisms[p].ids[(i + 1) % 3];
+      sides.emplace_back(std::uint64_t(std::min(a, b)) << 32 | std::max(a, b), p, i);
+    }
+  std::sort(sides.begin(), sides.end());
+  for (std::size_t s = 0; s + 1 < sides.size(); ++s) {
+    const auto& [key, p, i] = sides[s];
+    const auto& [key2, q, j] = sides[s + 1];
+    if (key != key2 || (s + 2 < sides.size() && std::get<0>(sides[s + 2]) == key) ||
+        (s > 0 && std::get<0>(sides[s - 1]) == key))
+      continue;
+    // The same four corners, seen the other way round: q's corner j is p's corner i + 1.
+    const auto& a = out.prisms[p].ids;
+    const auto& b = out.prisms[q].ids;
+    if (a[i] == b[(j + 1) % 3] && a[3 + i] == b[3 + (j + 1) % 3] && a[3 + (i + 1) % 3] == b[3 + j])
+      out.quads.push_back({{p, q}, {i, j}});
+  }
+  return out;
+}
+
 }  // namespace
 
 OptimizeReport optimize_shell(const SurfaceMesh& surface, const std::vector<double>& limit,
-                              ValidShell& valid, const OptimizeOptions& options) {
+                              ValidShell& valid, const OptimizeOptions& options,
+                              ShellChecker& checker) {
   OptimizeReport report;
-  if (!options.enabled || !valid.checks.valid()) return report;
+  if (!options.enabled || !valid.checks.valid() || valid.shell.mesh.tets.empty()) return report;
   const auto t0 = std::chrono::steady_clock::now();
   report.ran = true;
   TetMesh& mesh = valid.shell.mesh;
@@ -85,19 +177,28 @@ OptimizeReport optimize_shell(const SurfaceMesh& surface, const std::vector<doub
   const std::uint32_t n = static_cast<std::uint32_t>(surface.points.size());
   const std::size_t n_inner = input.inner_points.size();
 
-  // Owners: the surface vertices whose inner vertex each inner point is; incident tets; the
-  // layer points moving with each inner point and the ring of tets a move changes.
-  IndexLists owners, around, ring;
+  // Owners: the surface vertices whose inner vertex each inner point is; the layer points
+  // moving with each inner point; the prisms whose side quads may be cut the other way.
+  IndexLists owners;
   owners.build(n_inner, [&](auto emit) {
     for (std::uint32_t v = 0; v < n; ++v)
       if (input.inner_id[v] != kOnSurface) emit(input.inner_id[v], v);
   });
-  around.build(mesh.points.size(), [&](auto emit) {
-    for (std::uint32_t t = 0; t < mesh.tets.size(); ++t)
-      for (const std::uint32_t v : mesh.tets[t]) emit(v, t);
-  });
   const LayerPoints layer = layer_points(surface, input, valid.assemble);
-  {
+  CutPrisms cp;
+  if (options.recut) cp = cut_prisms(surface, input, valid.assemble.layers, mesh);
+  std::vector<std::int32_t> prism_of_tet(mesh.tets.size(), -1);
+  for (std::uint32_t p = 0; p < cp.prisms.size(); ++p)
+    for (int k = 0; k < 3; ++k) prism_of_tet[cp.prisms[p].first_tet + k] = std::int32_t(p);
+
+  // Incident tets of every point and the ring of tets a move of each inner point changes;
+  // built again after sweeps that cut quads the other way.
+  IndexLists around, ring;
+  const auto index_rings = [&] {
+    around.build(mesh.points.size(), [&](auto emit) {
+      for (std::uint32_t t = 0; t < mesh.tets.size(); ++t)
+        for (const std::uint32_t v : mesh.tets[t]) emit(v, t);
+    });
     std::vector<std::uint32_t> tets;
     ring.build(n_inner, [&](auto emit) {
       for (std::uint32_t i = 0; i < n_inner; ++i) {
@@ -109,7 +210,7 @@ OptimizeReport optimize_shell(const SurfaceMesh& surface, const std::vector<doub
         for (const std::uint32_t t : tets) emit(i, t);
       }
     });
-  }
+  };
   // Inner point i at `at`, its layer points with it.
   const auto place = [&](std::uint32_t i, const Vec3d& at) {
     mesh.points[n + i] = at;
@@ -118,54 +219,88 @@ OptimizeReport optimize_shell(const SurfaceMesh& surface, const std::vector<doub
       mesh.points[layer.point[d]] = s + (at - s) * layer.at[d];
     }
   };
+  // Prism p cut as `cuts`; quad q cut the other way.
+  const auto cut = [&](std::uint32_t p, int cuts) {
+    CutPrism& prism = cp.prisms[p];
+    prism.cuts = cuts;
+    const PrismTets split = split_prism_cut(prism.ids, cuts);
+    std::copy(split.tets.begin(), split.tets.end(), mesh.tets.begin() + prism.first_tet);
+  };
+  const auto flip = [&](const Quad& q) {
+    for (int k = 0; k < 2; ++k) cut(q.prism[k], cp.prisms[q.prism[k]].cuts ^ (1 << q.side[k]));
+  };
+  const auto worst_of_cuts = [&](const Quad& q, const std::array<int, 2>& cuts) {
+    Worst w;
+    for (int k = 0; k < 2; ++k) {
+      const PrismTets split = split_prism_cut(cp.prisms[q.prism[k]].ids, cuts[k]);
+      w.add(mesh, split.tets.begin(), split.tets.end());
+    }
+    return w;
+  };
 
-  ShellCheckOptions check_options;
-  check_options.max_listed = std::numeric_limits<std::size_t>::max();
-  check_options.layers = valid.assemble.layers;
-  ShellChecker checker(surface, check_options);
   ShellCheckResult checks = checker.check(mesh);
   ++report.checks;
-  if (!checks.valid()) return report;  // cannot happen for a valid shell; leave it as it is
+  if (!checks.valid()) return report;
 
   const std::vector<Vec3d> start(mesh.points.begin(), mesh.points.end());
-  std::vector<std::uint8_t> frozen(n_inner, 0);
-  std::vector<std::uint32_t> moved;
+  const std::vector<Tet> start_tets = mesh.tets;
+  std::vector<std::uint8_t> frozen(n_inner, 0), frozen_quad(cp.quads.size(), 0);
+  std::vector<std::uint32_t> moved, flipped;
   std::vector<Vec3d> before;  // position of moved[k] before this sweep
   constexpr double kSteps[] = {1.0, 0.5, 0.25};
   // Volume the moves may lose in all (gains are not counted back, and undoing a move only gives
-  // back what it lost): the coverage falls by at most options.max_coverage_loss.
+  // back what it lost): the coverage falls by at most options.max_coverage_loss. Cuts keep the
+  // volume: the two prisms of a quad trade what one gains for what the other loses.
   const double budget = options.max_coverage_loss * std::max(0.0, signed_volume(surface));
   double spent = 0;
 
-  std::vector<std::uint32_t> order(n_inner);
-  std::vector<Worst> worst_before(n_inner);
-  std::vector<std::uint8_t> taken(mesh.points.size());
+  std::vector<std::uint32_t> order;
+  std::vector<double> ring_quality(n_inner), quad_quality(cp.quads.size());
+  std::vector<std::uint8_t> taken(mesh.points.size()), moved_point(mesh.points.size()),
+      cut_prism(cp.prisms.size());
+  bool rings_current = false;
   for (int sweep = 0; sweep < options.sweeps; ++sweep) {
+    if (!rings_current) index_rings();
+    rings_current = true;
     moved.clear();
     before.clear();
-    // The worst vertices first; a vertex moves only if no vertex moved in this sweep shares a
-    // tet with it, so every tet has at most one corner moved per sweep: each move was judged
-    // on the tets as they end up, and any subset of the moves can be undone exactly.
-    for (std::uint32_t i = 0; i < n_inner; ++i) worst_before[i] = worst_of(mesh, ring[i]);
-    std::iota(order.begin(), order.end(), 0u);
+    flipped.clear();
+    // Only what touches the worst tets takes part: those at or below the quality of rank
+    // options.worst_fraction.
+    const std::vector<double> quality = tet_qualities(mesh);
+    std::vector<double> ranked = quality;
+    const double fraction = std::clamp(options.worst_fraction, 0.0, 1.0);
+    const auto rank = ranked.begin() + std::ptrdiff_t(fraction * double(ranked.size() - 1));
+    std::nth_element(ranked.begin(), rank, ranked.end());
+    const double threshold = *rank;
+
+    // Moves: the worst vertices first; a vertex moves only if no vertex moved in this sweep
+    // shares a tet with it, so every tet has at most one corner moved per sweep: each move was
+    // judged on the tets as they end up, and any subset of the moves can be undone exactly.
+    order.clear();
+    for (std::uint32_t i = 0; i < n_inner; ++i) {
+      ring_quality[i] = std::numeric_limits<double>::infinity();
+      for (const std::uint32_t t : ring[i]) ring_quality[i] = std::min(ring_quality[i], quality[t]);
+      if (!frozen[i] && owners[i].size() > 0 && ring_quality[i] <= threshold) order.push_back(i);
+    }
     std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
-      return worst_before[a].quality < worst_before[b].quality;
+      return ring_quality[a] < ring_quality[b];
     });
     std::fill(taken.begin(), taken.end(), 0);
+    std::fill(moved_point.begin(), moved_point.end(), 0);
     for (const std::uint32_t i : order) {
       const std::uint32_t pi = n + i;
-      if (frozen[i] || owners[i].size() == 0 || taken[pi] ||
-          std::any_of(layer.of[i].begin(), layer.of[i].end(),
-                      [&](std::uint32_t d) { return taken[layer.point[d]] != 0; }))
+      if (taken[pi] || std::any_of(layer.of[i].begin(), layer.of[i].end(),
+                                   [&](std::uint32_t d) { return taken[layer.point[d]] != 0; }))
         continue;
       const Vec3d p = mesh.points[pi];
-      const Worst& worst = worst_before[i];
+      Worst worst;
+      worst.add(mesh, ring[i].begin(), ring[i].end());
       Vec3d target{};
       double weights = 0;
       for (const std::uint32_t t : around[pi]) {
         const Tet& tet = mesh.tets[t];
-        const double q = tet_quality(mesh.points[tet[0]], mesh.points[tet[1]], mesh.points[tet[2]],
-                                     mesh.points[tet[3]]);
+        const double q = quality[t];
         const int k = int(std::find(tet.begin(), tet.end(), pi) - tet.begin());
         const int* f = kTetOutwardFace[k];
         const Vec3d &a = mesh.points[tet[f[0]]], &b = mesh.points[tet[f[1]]],
@@ -195,7 +330,8 @@ OptimizeReport optimize_shell(const SurfaceMesh& surface, const std::vector<doub
           if (distance(candidate, surface.points[v]) > limit[v]) within = false;
         if (!within) continue;
         place(i, candidate);
-        const Worst after = worst_of(mesh, ring[i]);
+        Worst after;
+        after.add(mesh, ring[i].begin(), ring[i].end());
         const double lost = std::max(0.0, worst.volume - after.volume);
         if (after.improves_on(worst) && spent + lost <= budget) {
           spent += lost;
@@ -203,20 +339,57 @@ OptimizeReport optimize_shell(const SurfaceMesh& surface, const std::vector<doub
           before.push_back(p);
           for (const std::uint32_t t : ring[i])
             for (const std::uint32_t v : mesh.tets[t]) taken[v] = 1;
+          moved_point[pi] = 1;
+          for (const std::uint32_t d : layer.of[i]) moved_point[layer.point[d]] = 1;
           break;
         }
         place(i, p);
       }
     }
-    if (moved.empty()) break;
-    // Check; move back (and freeze) the vertices of whatever offends until the shell is valid.
+
+    // Cuts: the worst quads first, of prisms none of whose corners moved in this sweep and no
+    // two of one prism, so each cut too was judged on the tets as they end up.
+    order.clear();
+    for (std::uint32_t q = 0; q < cp.quads.size(); ++q) {
+      quad_quality[q] = std::numeric_limits<double>::infinity();
+      for (const std::uint32_t p : cp.quads[q].prism)
+        for (int k = 0; k < 3; ++k)
+          quad_quality[q] = std::min(quad_quality[q], quality[cp.prisms[p].first_tet + k]);
+      if (!frozen_quad[q] && quad_quality[q] <= threshold) order.push_back(q);
+    }
+    std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+      return quad_quality[a] < quad_quality[b];
+    });
+    std::fill(cut_prism.begin(), cut_prism.end(), 0);
+    const auto blocked = [&](std::uint32_t p) {
+      const auto& ids = cp.prisms[p].ids;
+      return cut_prism[p] ||
+             std::any_of(ids.begin(), ids.end(), [&](std::uint32_t v) { return moved_point[v]; });
+    };
+    for (const std::uint32_t q : order) {
+      const Quad& quad = cp.quads[q];
+      if (blocked(quad.prism[0]) || blocked(quad.prism[1])) continue;
+      const std::array<int, 2> now = {cp.prisms[quad.prism[0]].cuts, cp.prisms[quad.prism[1]].cuts};
+      const std::array<int, 2> other = {now[0] ^ (1 << quad.side[0]), now[1] ^ (1 << quad.side[1])};
+      if (is_cyclic(other[0]) || is_cyclic(other[1]) ||
+          !worst_of_cuts(quad, other).improves_on(worst_of_cuts(quad, now)))
+        continue;
+      flip(quad);
+      cut_prism[quad.prism[0]] = cut_prism[quad.prism[1]] = 1;
+      flipped.push_back(q);
+    }
+    if (moved.empty() && flipped.empty()) break;
+    rings_current = flipped.empty();
+
+    // Check; undo (and freeze) the moves and cuts of whatever offends until the shell is valid.
     for (;;) {
       checks = checker.check(mesh);
       ++report.checks;
       if (checks.valid()) break;
-      std::vector<std::uint8_t> bad(mesh.points.size(), 0);
+      std::vector<std::uint8_t> bad(mesh.points.size(), 0), bad_prism(cp.prisms.size(), 0);
       const auto mark_tet = [&](std::uint32_t t) {
         for (const std::uint32_t v : mesh.tets[t]) bad[v] = 1;
+        if (prism_of_tet[t] >= 0) bad_prism[std::size_t(prism_of_tet[t])] = 1;
       };
       for (const std::uint32_t t : checks.first_inverted_tets) mark_tet(t);
       for (const std::uint32_t t : checks.first_zero_volume_tets) mark_tet(t);
@@ -229,30 +402,39 @@ OptimizeReport optimize_shell(const SurfaceMesh& surface, const std::vector<doub
         const bool offends =
             bad[n + i] || std::any_of(layer.of[i].begin(), layer.of[i].end(),
                                       [&](std::uint32_t d) { return bad[layer.point[d]] != 0; });
-        if (!offends || mesh.points[n + i] == before[k]) continue;
+        if (!offends || frozen[i]) continue;
         place(i, before[k]);
         frozen[i] = 1;
+        ++report.reverted;
         ++undone;
       }
-      if (undone == 0) {  // offenders among no moved vertex: undo the whole sweep
-        for (std::size_t k = 0; k < moved.size(); ++k) {
-          report.reverted += mesh.points[n + moved[k]] != before[k];  // not counted again
-          place(moved[k], before[k]);
-        }
+      for (const std::uint32_t q : flipped) {
+        const Quad& quad = cp.quads[q];
+        if (frozen_quad[q] || !(bad_prism[quad.prism[0]] || bad_prism[quad.prism[1]])) continue;
+        flip(quad);
+        frozen_quad[q] = 1;
+        ++report.reverted_cuts;
+        ++undone;
+      }
+      if (undone == 0) {  // offenders among no moved vertex or cut prism: undo the whole sweep
+        for (std::size_t k = 0; k < moved.size(); ++k)
+          if (!frozen[moved[k]])
+            place(moved[k], before[k]), frozen[moved[k]] = 1, ++report.reverted;
+        for (const std::uint32_t q : flipped)
+          if (!frozen_quad[q]) flip(cp.quads[q]), frozen_quad[q] = 1, ++report.reverted_cuts;
         checks = checker.check(mesh);
         ++report.checks;
-        moved.clear();
         break;
       }
-      report.reverted += undone;
     }
-    if (!checks.valid()) {  // cannot happen: every move undone is the shell that was valid
+    if (!checks.valid()) {  // cannot happen: every move and cut undone is the valid shell
       std::copy(start.begin(), start.end(), mesh.points.begin());
+      mesh.tets = start_tets;
+      for (CutPrism& p : cp.prisms) p.cuts = prism_cuts(p.ids);
       checks = checker.check(mesh);
       ++report.checks;
       break;
     }
-    if (moved.empty()) break;
     ++report.sweeps;
   }
 
@@ -269,6 +451,10 @@ OptimizeReport optimize_shell(const SurfaceMesh& surface, const std::vector<doub
     for (const std::uint32_t d : layer.of[i])
       mesh.thickness[layer.point[d]] =
           distance(surface.points[layer.vertex[d]], mesh.points[layer.point[d]]);
+  }
+  for (const Quad& q : cp.quads) {
+    const CutPrism& p = cp.prisms[q.prism[0]];
+    report.recut_quads += ((p.cuts ^ prism_cuts(p.ids)) >> q.side[0]) & 1;
   }
   mesh.quality = tet_qualities(mesh);
   valid.checks = checks;

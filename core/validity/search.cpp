@@ -739,7 +739,8 @@ void give_back(const ShellSearch& search, const SurfaceMesh& surface, State& s,
 
 ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& traces,
                             const InnerVertices& start, const ValidityOptions& options,
-                            const StageMonitor& monitor) {
+                            const StageMonitor& monitor,
+                            const BeforeFinalCheck& before_final_check) {
   const auto t0 = std::chrono::steady_clock::now();
   const std::uint32_t n = static_cast<std::uint32_t>(surface.points.size());
   if (std::uint64_t(options.layers + 1) * n > UINT32_MAX)  // LocalPrism's layer point ids
@@ -757,7 +758,8 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
   ShellCheckOptions check_options;
   check_options.max_listed = std::numeric_limits<std::size_t>::max();
   check_options.layers = options.layers;
-  // Released before the final check, which builds a grid of its own.
+  // Released before the final check, which builds a grid of its own (after serving
+  // before_final_check).
   auto checker = std::make_unique<ShellChecker>(surface, check_options);
   ShellCheckOptions first_few;  // the final check's: the first few offenders of each kind
   first_few.layers = options.layers;
@@ -924,11 +926,12 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
 
   out.seconds = seconds_since(t0);
   monitor.milestone(0.9);  // the search is done; the final full check is the rest
+  out.shell = assemble_shell(surface, out.input, out.assemble);  // with quality, for the report
+  if (before_final_check && out.checks.valid()) before_final_check(out, *checker);
   checker.reset();
 
   // The incremental checks trusted unchanged tets; the result carries one full check (the
   // confirmation every run gets, valid search or not: out.checks.seconds, not out.seconds).
-  out.shell = assemble_shell(surface, out.input, out.assemble);  // with quality, for the report
   out.checks = check_shell(surface, out.shell.mesh, first_few);
   out.on_surface = search.folded();
   out.cap_faces = search.caps();

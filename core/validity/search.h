@@ -46,6 +46,7 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -116,11 +117,18 @@ inline std::size_t estimate_validity_bytes(const SurfaceMesh& surface, int layer
   return surface.triangles.size() * kValidityBytesPerFace * static_cast<std::size_t>(layers);
 }
 
+/// Work on the valid shell before make_valid_shell()'s final full check — the optimisation
+/// (optimize.h) — given the search's ShellChecker, whose last check was of that shell. It may
+/// move points and recut prisms (keeping assemble_shell()'s layout of the tets); the final check
+/// is then of the changed shell.
+using BeforeFinalCheck = std::function<void(ValidShell&, ShellChecker&)>;
+
 /// Finds the thickest valid inner vertices along the traces, starting from `start`. Reports to
 /// `monitor` the share of the first round's offending elements gone (90% of the stage; the
-/// final full check is the rest) and checks it.
+/// final full check is the rest), runs `before_final_check` on a valid shell and checks it.
 ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& traces,
                             const InnerVertices& start, const ValidityOptions& options = {},
-                            const StageMonitor& monitor = StageMonitor());
+                            const StageMonitor& monitor = StageMonitor(),
+                            const BeforeFinalCheck& before_final_check = {});
 
 }  // namespace vdb_shell

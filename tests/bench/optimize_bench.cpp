@@ -26,23 +26,22 @@ int main(int argc, char** argv) {
   for (const char* name : {"star", "propeller", "horn", "torus"})
     inputs.emplace_back(name, vdb_shell::make_shape(name));
   std::printf(
-      "| input | res | min Q | p5 Q | min dihedral deg | coverage | moved | optimize s | "
-      "validity s |\n|---|---|---|---|---|---|---|---|---|\n");
+      "| input | res | min Q | p5 Q | min dihedral deg | coverage | moved | recut | optimize s | "
+      "validity s |\n|---|---|---|---|---|---|---|---|---|---|\n");
   for (const int res : resolutions)
     for (const auto& [name, mesh] : inputs) {
       vdb_shell::ShellOptions o;
       o.fields.resolution = res;
-      o.optimize.enabled = true;
       try {
         const vdb_shell::ShellResult r = vdb_shell::build_shell(mesh, o, {}, name);
         const vdb_shell::OptimizeSummary& b = r.optimize;
         const vdb_shell::QualitySummary& q = r.quality;
         std::printf(
-            "| %s | %d | %.4f -> %.4f | %.4f -> %.4f | %.3f -> %.3f | %.4f -> %.4f | %zu | %.2f | "
-            "%.2f |\n",
+            "| %s | %d | %.4f -> %.4f | %.4f -> %.4f | %.3f -> %.3f | %.4f -> %.4f | %zu | %zu | "
+            "%.2f | %.2f |\n",
             name.c_str(), res, b.min_quality_before, q.min_quality, b.p5_quality_before,
             q.p5_quality, b.min_dihedral_deg_before, q.min_dihedral_deg, b.coverage_before,
-            q.coverage, b.report.moved_vertices, b.report.seconds,
+            q.coverage, b.report.moved_vertices, b.report.recut_quads, b.report.seconds,
             r.timings.validity - b.report.seconds);
       } catch (const std::exception& e) {
         std::printf("| %s | %d | failed: %s |\n", name.c_str(), res, e.what());

@@ -163,6 +163,15 @@ const std::vector<ReportCase>& report_cases() {
          EXPECT_EQ(j["shell"]["layer_ratio"], 1.5);
          EXPECT_GT(j["shell"]["tets"].get<double>(), 1.5 * b["shell"]["tets"].get<double>());
        }},
+      {"--max-coverage-loss",
+       {"--max-coverage-loss", "0"},
+       [](const json& b, const json& j) {  // no move may lose volume: coverage never falls
+         EXPECT_EQ(b["optimize"]["max_coverage_loss"], 0.002);
+         EXPECT_EQ(j["optimize"]["max_coverage_loss"], 0.0);
+         EXPECT_LT(j["optimize"]["moved_vertices"], b["optimize"]["moved_vertices"]);
+         EXPECT_GE(j["shell"]["coverage"].get<double>(),
+                   j["optimize"]["coverage_before"].get<double>() - 1e-12);
+       }},
       {"--voxel-size",
        {"--voxel-size", "0.05"},
        [](const json& b, const json& j) {
@@ -408,7 +417,7 @@ const std::map<std::string, std::string>& shown_elsewhere() {
       {"--repaired", "CliRepair.AHoleIsRefusedWithTheHintAndRepairedWithIt"},
       {"--html", "CliHtml.APageWithEveryPictureNextToTheShell"},
       {"--optimize", "Optimize.ValidThickAndNeverWorseAtItsWorst"},
-      {"--no-optimize", "Optimize.OffByDefaultAndReported"},
+      {"--no-optimize", "Optimize.OnByDefaultAndReported"},
   };
   return m;
 }

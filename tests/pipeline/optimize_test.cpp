@@ -1,11 +1,16 @@
 // --optimize (core/validity/optimize.h) end to end: the optimised shell is valid by the
-// independent checks, keeps the thickness limits and its coverage, never lowers the smallest
-// quality or dihedral angle, raises the 5th percentile, and is the same for any thread count.
+// independent checks, keeps its prisms (recut ones still meeting face to face), the thickness
+// limits and its coverage, never lowers the smallest quality or dihedral angle, raises the 5th
+// percentile, and is the same for any thread count.
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <map>
+#include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "assets/shapes.h"
@@ -44,6 +49,23 @@ Measures measures(const TetMesh& m) {
   return out;
 }
 
+/// How many tet faces (vertex triples) occur once, and whether none occurs more than twice.
+std::pair<std::size_t, bool> unshared_faces(const TetMesh& m) {
+  std::map<std::array<std::uint32_t, 3>, int> count;
+  for (const Tet& t : m.tets)
+    for (int skip = 0; skip < 4; ++skip) {
+      std::array<std::uint32_t, 3> f;
+      for (int k = 0, j = 0; k < 4; ++k)
+        if (k != skip) f[j++] = t[k];
+      std::sort(f.begin(), f.end());
+      ++count[f];
+    }
+  std::size_t once = 0;
+  bool at_most_twice = true;
+  for (const auto& [face, c] : count) once += c == 1, at_most_twice = at_most_twice && c <= 2;
+  return {once, at_most_twice};
+}
+
 double at_rank(std::vector<double> v, double fraction) {
   std::sort(v.begin(), v.end());
   return v[std::size_t(fraction * v.size())];
@@ -60,12 +82,30 @@ ShellResult shell(const SurfaceMesh& surface, bool optimize, int threads = 0,
 }
 
 TEST(Optimize, ValidThickAndNeverWorseAtItsWorst) {
+  int recut = 0;  // shapes with some prism cut otherwise
   for (const char* name : {"star", "horn", "propeller", "torus"}) {
     const SurfaceMesh surface = make_shape(name);
     const ShellResult plain = shell(surface, false), opt = shell(surface, true);
     ASSERT_EQ(test::independent_shell_problems(opt.surface, opt.mesh, 2 * opt.validity.sectors), "")
         << name;
-    EXPECT_EQ(opt.mesh.tets, plain.mesh.tets) << name;  // the same tets, moved corners only
+    // The same prisms, some cut otherwise: as many tets of each triangle, on its prism's
+    // corners, meeting face to face (an unshared face more would be a quad cut two ways).
+    ASSERT_EQ(opt.mesh.source_triangle, plain.mesh.source_triangle) << name;
+    for (std::size_t t = 0; t < opt.mesh.tets.size(); ++t) {
+      std::array<std::uint32_t, 4> a = opt.mesh.tets[t];
+      std::set<std::uint32_t> corners;
+      for (std::size_t u = t; u < opt.mesh.tets.size() &&
+                              plain.mesh.source_triangle[u] == plain.mesh.source_triangle[t];
+           ++u)
+        corners.insert(plain.mesh.tets[u].begin(), plain.mesh.tets[u].end());
+      for (std::size_t u = t;
+           u-- > 0 && plain.mesh.source_triangle[u] == plain.mesh.source_triangle[t];)
+        corners.insert(plain.mesh.tets[u].begin(), plain.mesh.tets[u].end());
+      for (const std::uint32_t v : a) ASSERT_TRUE(corners.count(v)) << name << " tet " << t;
+    }
+    recut += opt.mesh.tets != plain.mesh.tets;
+    EXPECT_EQ(unshared_faces(opt.mesh), unshared_faces(plain.mesh)) << name;
+    EXPECT_TRUE(unshared_faces(opt.mesh).second) << name;
     for (std::size_t v = 0; v < surface.points.size(); ++v)
       ASSERT_EQ(opt.mesh.points[v], plain.mesh.points[v]) << name;
     const Measures before = measures(plain.mesh), after = measures(opt.mesh);
@@ -88,6 +128,7 @@ TEST(Optimize, ValidThickAndNeverWorseAtItsWorst) {
     for (const Vec3d& p : opt.inner_surface.points)
       ASSERT_TRUE(std::binary_search(points.begin(), points.end(), p, less)) << name;
   }
+  EXPECT_GT(recut, 0);
 }
 
 TEST(Optimize, KeepsTheThicknessLimitAndIsDeterministic) {
@@ -96,6 +137,7 @@ TEST(Optimize, KeepsTheThicknessLimitAndIsDeterministic) {
   const ShellResult one = shell(surface, true, 1, limit), two = shell(surface, true, 2, limit);
   ASSERT_GT(one.optimize.report.moved_vertices, 0u);
   EXPECT_EQ(one.mesh.points, two.mesh.points);
+  EXPECT_EQ(one.mesh.tets, two.mesh.tets);
   // Every surface vertex is within the limit of its inner vertex: inner_surface triangle t is
   // surface triangle t reversed.
   const int corner[3] = {0, 2, 1};
@@ -107,12 +149,14 @@ TEST(Optimize, KeepsTheThicknessLimitAndIsDeterministic) {
     }
 }
 
-TEST(Optimize, OffByDefaultAndReported) {
-  EXPECT_FALSE(ShellOptions().optimize.enabled);
-  const ShellResult r = shell(make_shape("horn"), true);
+TEST(Optimize, OnByDefaultAndReported) {
+  EXPECT_TRUE(ShellOptions().optimize.enabled);
+  const ShellResult r = shell(make_shape("horn"), true), off = shell(make_shape("horn"), false);
   const std::string report = report_json(r);
   EXPECT_NE(report.find("\"optimize\": {\n    \"enabled\": true"), std::string::npos) << report;
+  EXPECT_NE(report_json(off).find("\"optimize\": {\n    \"enabled\": false"), std::string::npos);
   EXPECT_GT(r.quality.p5_quality, r.optimize.p5_quality_before);
+  EXPECT_EQ(r.optimize.p5_quality_before, off.quality.p5_quality);
 }
 
 }  // namespace

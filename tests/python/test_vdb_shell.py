@@ -328,6 +328,7 @@ def test_unknown_option_lists_the_known_ones(sphere):
     ({"layers": 0}, ["layers 0", "[1, 64]"]),
     ({"layers": 2.5}, ["layers", "integer"]),
     ({"layer_ratio": 20}, ["layer_ratio 20", "[0.1, 10]"]),
+    ({"max_coverage_loss": 0.5}, ["max_coverage_loss 0.5", "[0, 0.1]"]),
     ({"max_memory": 0}, ["max_memory 0"]),
     ({"threads": -2}, ["threads -2"]),
     ({"threads": 2**40}, ["threads", "out of range"]),
@@ -542,15 +543,16 @@ def test_write_traces(sphere_shell, tmp_path):
     assert path.is_file() and "POLYDATA" in path.read_text()
 
 
-def test_optimize_option(sphere):
-    plain = vdb_shell.build_shell(*sphere, resolution=RESOLUTION)
-    optimized = vdb_shell.build_shell(*sphere, resolution=RESOLUTION, optimize=True)
+def test_optimize_option(sphere, sphere_shell):
+    plain = vdb_shell.build_shell(*sphere, resolution=RESOLUTION, optimize=False)
     assert plain.report["optimize"]["enabled"] is False
-    report = optimized.report["optimize"]
+    report = sphere_shell.report["optimize"]  # on by default
     assert report["enabled"] is True
     assert report["p5_before"] == pytest.approx(plain.report["quality"]["p5"])
-    assert optimized.report["quality"]["min"] >= plain.report["quality"]["min"]
-    assert np.array_equal(optimized.tets, plain.tets)
+    assert sphere_shell.report["quality"]["min"] >= plain.report["quality"]["min"]
+    # The same prisms: as many tets, each from the same triangle.
+    assert sphere_shell.tets.shape == plain.tets.shape
+    assert np.array_equal(sphere_shell.source_triangle, plain.source_triangle)
 
 
 def test_layers_option(sphere, sphere_shell, tmp_path):
