@@ -11,6 +11,7 @@
 #include "core/assemble/assemble.h"
 #include "core/assemble/quality.h"
 #include "core/base/index_lists.h"
+#include "core/base/parallel.h"
 #include "core/validity/shell_checks.h"
 
 namespace vdb_shell {
@@ -23,17 +24,21 @@ struct Worst {
   double quality = std::numeric_limits<double>::infinity();
   double dihedral = std::numeric_limits<double>::infinity();
   double volume = 0;  ///< of all the tets around the point
-  /// Takes in the tets [begin, end): indices into mesh.tets, or tets.
-  template <class It>
-  void add(const TetMesh& mesh, It begin, It end) {
+  /// Takes in the tets [begin, end): indices into mesh.tets, or tets; their corner v at at(v).
+  template <class It, class At>
+  void add(const TetMesh& mesh, It begin, It end, const At& at) {
     for (; begin != end; ++begin) {
       const Tet& tet = tet_of(mesh, *begin);
-      const Vec3d &a = mesh.points[tet[0]], &b = mesh.points[tet[1]], &c = mesh.points[tet[2]],
-                  &d = mesh.points[tet[3]];
+      const Vec3d a = at(tet[0]), b = at(tet[1]), c = at(tet[2]), d = at(tet[3]);
       quality = std::min(quality, tet_quality(a, b, c, d));
       dihedral = std::min(dihedral, tet_min_dihedral_deg(a, b, c, d));
       volume += tet_volume(a, b, c, d);
     }
+  }
+  /// The same, the corners where they are.
+  template <class It>
+  void add(const TetMesh& mesh, It begin, It end) {
+    add(mesh, begin, end, [&](std::uint32_t v) { return mesh.points[v]; });
   }
   static const Tet& tet_of(const TetMesh& mesh, std::uint32_t t) { return mesh.tets[t]; }
   static const Tet& tet_of(const TetMesh&, const Tet& tet) { return tet; }
@@ -44,6 +49,17 @@ struct Worst {
     return q && d &&
            (quality > o.quality * (1 + 1e-6) + 1e-12 || dihedral > o.dihedral * (1 + 1e-6) + 1e-9);
   }
+};
+
+/// The steps a vertex tries towards its target, largest first.
+constexpr int kStepCount = 3;
+constexpr double kSteps[kStepCount] = {1.0, 0.5, 0.25};
+
+/// What moving one vertex by each step would do, its tets as they are.
+struct MoveTrial {
+  std::array<Vec3d, kStepCount> at{};               ///< where the step takes it
+  std::array<std::uint8_t, kStepCount> improves{};  ///< within the limits, and improves its tets
+  std::array<double, kStepCount> lost{};            ///< volume its tets lose
 };
 
 /// The layer points of a layered shell (assemble.h): each moves with an inner point, on the
@@ -247,7 +263,6 @@ OptimizeReport optimize_shell(const SurfaceMesh& surface, const std::vector<doub
   std::vector<std::uint8_t> frozen(n_inner, 0), frozen_quad(cp.quads.size(), 0);
   std::vector<std::uint32_t> moved, flipped;
   std::vector<Vec3d> before;  // position of moved[k] before this sweep
-  constexpr double kSteps[] = {1.0, 0.5, 0.25};
   // Volume the moves may lose in all (gains are not counted back, and undoing a move only gives
   // back what it lost): the coverage falls by at most options.max_coverage_loss. Cuts keep the
   // volume: the two prisms of a quad trade what one gains for what the other loses.
@@ -255,6 +270,8 @@ OptimizeReport optimize_shell(const SurfaceMesh& surface, const std::vector<doub
   double spent = 0;
 
   std::vector<std::uint32_t> order;
+  std::vector<MoveTrial> trials;
+  std::vector<std::uint8_t> improves;  // per candidate quad: recutting it would improve
   std::vector<double> ring_quality(n_inner), quad_quality(cp.quads.size());
   std::vector<std::uint8_t> taken(mesh.points.size()), moved_point(mesh.points.size()),
       cut_prism(cp.prisms.size());
@@ -286,13 +303,14 @@ OptimizeReport optimize_shell(const SurfaceMesh& surface, const std::vector<doub
     std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
       return ring_quality[a] < ring_quality[b];
     });
-    std::fill(taken.begin(), taken.end(), 0);
-    std::fill(moved_point.begin(), moved_point.end(), 0);
-    for (const std::uint32_t i : order) {
-      const std::uint32_t pi = n + i;
-      if (taken[pi] || std::any_of(layer.of[i].begin(), layer.of[i].end(),
-                                   [&](std::uint32_t d) { return taken[layer.point[d]] != 0; }))
-        continue;
+    // Every candidate's steps are tried in parallel on the tets as they are: a vertex that moves
+    // has no tet in common with one moved before it in the sweep, so its tets are still as they
+    // were, and the sequential pass below takes the same moves as trying each in turn would.
+    trials.resize(order.size());
+    for_each_index(order.size(), [&](std::size_t k) {
+      const std::uint32_t i = order[k], pi = n + i;
+      MoveTrial& trial = trials[k];
+      trial = MoveTrial{};
       const Vec3d p = mesh.points[pi];
       Worst worst;
       worst.add(mesh, ring[i].begin(), ring[i].end());
@@ -301,20 +319,20 @@ OptimizeReport optimize_shell(const SurfaceMesh& surface, const std::vector<doub
       for (const std::uint32_t t : around[pi]) {
         const Tet& tet = mesh.tets[t];
         const double q = quality[t];
-        const int k = int(std::find(tet.begin(), tet.end(), pi) - tet.begin());
-        const int* f = kTetOutwardFace[k];
+        const int c = int(std::find(tet.begin(), tet.end(), pi) - tet.begin());
+        const int* f = kTetOutwardFace[c];
         const Vec3d &a = mesh.points[tet[f[0]]], &b = mesh.points[tet[f[1]]],
-                    &c = mesh.points[tet[f[2]]];
-        const Vec3d normal = cross(b - a, c - a);  // out of the tet, away from p
+                    &d = mesh.points[tet[f[2]]];
+        const Vec3d normal = cross(b - a, d - a);  // out of the tet, away from p
         const double len = norm(normal);
         if (!(len > 0)) continue;
-        const double edge = (distance(a, b) + distance(b, c) + distance(c, a)) / 3;
-        const Vec3d apex = (a + b + c) / 3.0 - normal * (std::sqrt(2.0 / 3.0) * edge / len);
+        const double edge = (distance(a, b) + distance(b, d) + distance(d, a)) / 3;
+        const Vec3d apex = (a + b + d) / 3.0 - normal * (std::sqrt(2.0 / 3.0) * edge / len);
         const double w = 1.0 / ((std::max(q, 0.0) + 0.02) * (std::max(q, 0.0) + 0.02));
         target += apex * w;
         weights += w;
       }
-      if (!(weights > 0)) continue;
+      if (!(weights > 0)) return;
       target = target / weights;
       // No move outward: the component towards the surface vertices it belongs to is dropped,
       // so the shell keeps its thickness (its coverage) there.
@@ -323,27 +341,47 @@ OptimizeReport optimize_shell(const SurfaceMesh& surface, const std::vector<doub
       const Vec3d inward = normalized(p - owners_at / double(owners[i].size()));
       const double outward = -dot(target - p, inward);
       if (outward > 0) target += inward * outward;
-      for (const double step : kSteps) {
-        const Vec3d candidate = p + (target - p) * step;
+      for (int step = 0; step < kStepCount; ++step) {
+        const Vec3d candidate = p + (target - p) * kSteps[step];
         bool within = true;
         for (const std::uint32_t v : owners[i])
           if (distance(candidate, surface.points[v]) > limit[v]) within = false;
         if (!within) continue;
-        place(i, candidate);
         Worst after;
-        after.add(mesh, ring[i].begin(), ring[i].end());
-        const double lost = std::max(0.0, worst.volume - after.volume);
-        if (after.improves_on(worst) && spent + lost <= budget) {
-          spent += lost;
-          moved.push_back(i);
-          before.push_back(p);
-          for (const std::uint32_t t : ring[i])
-            for (const std::uint32_t v : mesh.tets[t]) taken[v] = 1;
-          moved_point[pi] = 1;
-          for (const std::uint32_t d : layer.of[i]) moved_point[layer.point[d]] = 1;
-          break;
-        }
-        place(i, p);
+        after.add(mesh, ring[i].begin(), ring[i].end(), [&](std::uint32_t v) {
+          if (v == pi) return candidate;
+          for (const std::uint32_t d : layer.of[i])
+            if (v == layer.point[d]) {
+              const Vec3d& s = surface.points[layer.vertex[d]];
+              return s + (candidate - s) * layer.at[d];
+            }
+          return mesh.points[v];
+        });
+        if (!after.improves_on(worst)) continue;
+        trial.at[step] = candidate;
+        trial.improves[step] = 1;
+        trial.lost[step] = std::max(0.0, worst.volume - after.volume);
+      }
+    });
+    std::fill(taken.begin(), taken.end(), 0);
+    std::fill(moved_point.begin(), moved_point.end(), 0);
+    for (std::size_t k = 0; k < order.size(); ++k) {
+      const std::uint32_t i = order[k], pi = n + i;
+      if (taken[pi] || std::any_of(layer.of[i].begin(), layer.of[i].end(),
+                                   [&](std::uint32_t d) { return taken[layer.point[d]] != 0; }))
+        continue;
+      const MoveTrial& trial = trials[k];
+      for (int step = 0; step < kStepCount; ++step) {
+        if (!trial.improves[step] || spent + trial.lost[step] > budget) continue;
+        spent += trial.lost[step];
+        moved.push_back(i);
+        before.push_back(mesh.points[pi]);
+        place(i, trial.at[step]);
+        for (const std::uint32_t t : ring[i])
+          for (const std::uint32_t v : mesh.tets[t]) taken[v] = 1;
+        moved_point[pi] = 1;
+        for (const std::uint32_t d : layer.of[i]) moved_point[layer.point[d]] = 1;
+        break;
       }
     }
 
@@ -360,23 +398,33 @@ OptimizeReport optimize_shell(const SurfaceMesh& surface, const std::vector<doub
     std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
       return quad_quality[a] < quad_quality[b];
     });
-    std::fill(cut_prism.begin(), cut_prism.end(), 0);
-    const auto blocked = [&](std::uint32_t p) {
+    // Judged in parallel on the cuts as they are (a quad recut only if neither prism was before
+    // it in the sweep), taken in order after.
+    const auto moved_corner = [&](std::uint32_t p) {
       const auto& ids = cp.prisms[p].ids;
-      return cut_prism[p] ||
-             std::any_of(ids.begin(), ids.end(), [&](std::uint32_t v) { return moved_point[v]; });
+      return std::any_of(ids.begin(), ids.end(), [&](std::uint32_t v) { return moved_point[v]; });
     };
-    for (const std::uint32_t q : order) {
-      const Quad& quad = cp.quads[q];
-      if (blocked(quad.prism[0]) || blocked(quad.prism[1])) continue;
-      const std::array<int, 2> now = {cp.prisms[quad.prism[0]].cuts, cp.prisms[quad.prism[1]].cuts};
-      const std::array<int, 2> other = {now[0] ^ (1 << quad.side[0]), now[1] ^ (1 << quad.side[1])};
-      if (is_cyclic(other[0]) || is_cyclic(other[1]) ||
-          !worst_of_cuts(quad, other).improves_on(worst_of_cuts(quad, now)))
-        continue;
+    const auto other_cuts = [&](const Quad& quad) {
+      return std::array<int, 2>{cp.prisms[quad.prism[0]].cuts ^ (1 << quad.side[0]),
+                                cp.prisms[quad.prism[1]].cuts ^ (1 << quad.side[1])};
+    };
+    improves.assign(order.size(), 0);
+    for_each_index(order.size(), [&](std::size_t k) {
+      const Quad& quad = cp.quads[order[k]];
+      const std::array<int, 2> other = other_cuts(quad);
+      improves[k] = !moved_corner(quad.prism[0]) && !moved_corner(quad.prism[1]) &&
+                    !is_cyclic(other[0]) && !is_cyclic(other[1]) &&
+                    worst_of_cuts(quad, other)
+                        .improves_on(worst_of_cuts(
+                            quad, {cp.prisms[quad.prism[0]].cuts, cp.prisms[quad.prism[1]].cuts}));
+    });
+    std::fill(cut_prism.begin(), cut_prism.end(), 0);
+    for (std::size_t k = 0; k < order.size(); ++k) {
+      const Quad& quad = cp.quads[order[k]];
+      if (!improves[k] || cut_prism[quad.prism[0]] || cut_prism[quad.prism[1]]) continue;
       flip(quad);
       cut_prism[quad.prism[0]] = cut_prism[quad.prism[1]] = 1;
-      flipped.push_back(q);
+      flipped.push_back(order[k]);
     }
     if (moved.empty() && flipped.empty()) break;
     rings_current = flipped.empty();
