@@ -109,18 +109,28 @@ void expect_conforming_shell(const SurfaceMesh& s, const ShellInput& in, const A
 
 // ---------------------------------------------------------------------------------------------
 
-TEST(Assemble, SplitPrismEveryIndexOrder) {
-  // A prism with planar sides: the inner triangle is the outer one shrunk about a point below
-  // it, so its volume is known and both diagonals of each side are valid.
+/// A prism with planar sides: the inner triangle is the outer one shrunk about a point below
+/// it, so its volume is known and both diagonals of each side are valid.
+struct PlanarPrism {
+  std::array<Vec3d, 6> corner;  ///< outer a, b, c, then inner a', b', c'
+  double volume = 0;
+};
+PlanarPrism planar_prism() {
   const std::array<Vec3d, 3> outer = {Vec3d{0, 0, 0}, Vec3d{1, 0, 0}, Vec3d{0.2, 1, 0}};
   const Vec3d apex{0.3, 0.4, -2.0};
-  std::array<Vec3d, 6> corner;
+  PlanarPrism p;
   for (int k = 0; k < 3; ++k) {
-    corner[k] = outer[k];
-    corner[k + 3] = apex + (outer[k] - apex) * 0.6;
+    p.corner[k] = outer[k];
+    p.corner[k + 3] = apex + (outer[k] - apex) * 0.6;
   }
-  const double prism_volume =
-      tet_volume(outer[0], outer[2], outer[1], apex) * (1.0 - 0.6 * 0.6 * 0.6);
+  p.volume = tet_volume(outer[0], outer[2], outer[1], apex) * (1.0 - 0.6 * 0.6 * 0.6);
+  return p;
+}
+
+TEST(Assemble, SplitPrismEveryIndexOrder) {
+  const PlanarPrism prism = planar_prism();
+  const std::array<Vec3d, 6>& corner = prism.corner;
+  const double prism_volume = prism.volume;
   ASSERT_GT(prism_volume, 0.0);
 
   std::array<std::uint32_t, 6> ids = {0, 1, 2, 3, 4, 5};
@@ -170,16 +180,9 @@ TEST(Assemble, SplitPrismEveryIndexOrder) {
 }
 
 TEST(Assemble, SplitPrismCutFollowsEveryAcyclicCut) {
-  // The prism of SplitPrismEveryIndexOrder (planar sides: every cut is a valid split).
-  const std::array<Vec3d, 3> outer = {Vec3d{0, 0, 0}, Vec3d{1, 0, 0}, Vec3d{0.2, 1, 0}};
-  const Vec3d apex{0.3, 0.4, -2.0};
-  std::array<Vec3d, 6> corner;
-  for (int k = 0; k < 3; ++k) {
-    corner[k] = outer[k];
-    corner[k + 3] = apex + (outer[k] - apex) * 0.6;
-  }
-  const double prism_volume =
-      tet_volume(outer[0], outer[2], outer[1], apex) * (1.0 - 0.6 * 0.6 * 0.6);
+  const PlanarPrism prism = planar_prism();  // planar sides: every acyclic cut is a valid split
+  const std::array<Vec3d, 6>& corner = prism.corner;
+  const double prism_volume = prism.volume;
   std::array<std::uint32_t, 6> ids = {10, 11, 12, 13, 14, 15};
   int orders = 0;
   do {
