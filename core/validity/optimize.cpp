@@ -112,24 +112,24 @@ struct CutPrisms {
   std::vector<Quad> quads;
 };
 
-/// The prisms of the shell `mesh` (assemble_shell() of surface and input) whose 3 tets are
-/// those of the global-index rule on six distinct corners, layer by layer, and the quads two such
-/// prisms share. Prisms with welded or on-surface corners and cap tets are left out, and so are
-/// the quads they touch.
+/// The prisms of the shell `mesh` (assemble_shell() of surface and input, its layer points
+/// `layer`) whose 3 tets are those of the global-index rule on six distinct corners, layer by
+/// layer, and the quads two such prisms share. Prisms with welded or on-surface corners and cap
+/// tets are left out, and so are the quads they touch.
 CutPrisms cut_prisms(const SurfaceMesh& surface, const ShellInput& input, int layers,
-                     const TetMesh& mesh) {
+                     const LayerPoints& layer, const TetMesh& mesh) {
   const std::size_t n = surface.points.size(), K = static_cast<std::size_t>(layers);
-  // level[(K + 1) v + k]: vertex v's point on layer boundary k (0 the surface, K the inner one).
+  // level[(K + 1) v + k]: vertex v's point on layer boundary k (0 the surface, K the inner one;
+  // v itself at every level when it stays on the surface).
   std::vector<std::uint32_t> level((K + 1) * n);
-  auto next = static_cast<std::uint32_t>(first_layer_point(surface, input));
   for (std::uint32_t v = 0; v < n; ++v) {
     const std::uint32_t i = input.inner_id[v];
-    for (std::size_t k = 0; k <= K; ++k)
-      level[(K + 1) * v + k] = i == kOnSurface ? v
-                               : k == 0        ? v
-                               : k == K        ? static_cast<std::uint32_t>(n + i)
-                                               : next++;
+    std::fill_n(level.begin() + std::ptrdiff_t((K + 1) * v), K + 1, v);
+    if (i != kOnSurface) level[(K + 1) * v + K] = static_cast<std::uint32_t>(n + i);
   }
+  for (std::size_t d = 0; d < layer.point.size();
+       ++d)  // K - 1 in a row per vertex, outermost first
+    level[(K + 1) * layer.vertex[d] + 1 + d % (K - 1)] = layer.point[d];
   std::vector<std::uint32_t> first(surface.triangles.size() + 1, 0);
   for (const std::uint32_t f : mesh.source_triangle) ++first[f + 1];
   for (std::size_t f = 0; f < surface.triangles.size(); ++f) first[f + 1] += first[f];
@@ -201,8 +201,7 @@ OptimizeReport optimize_shell(const SurfaceMesh& surface, const std::vector<doub
       if (input.inner_id[v] != kOnSurface) emit(input.inner_id[v], v);
   });
   const LayerPoints layer = layer_points(surface, input, valid.assemble);
-  CutPrisms cp;
-  if (options.recut) cp = cut_prisms(surface, input, valid.assemble.layers, mesh);
+  CutPrisms cp = cut_prisms(surface, input, valid.assemble.layers, layer, mesh);
   std::vector<std::int32_t> prism_of_tet(mesh.tets.size(), -1);
   for (std::uint32_t p = 0; p < cp.prisms.size(); ++p)
     for (int k = 0; k < 3; ++k) prism_of_tet[cp.prisms[p].first_tet + k] = std::int32_t(p);

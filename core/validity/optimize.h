@@ -37,8 +37,6 @@ struct OptimizeOptions {
   /// Volume all moves together may lose, as a fraction of the enclosed volume (coverage;
   /// --max-coverage-loss).
   double max_coverage_loss = 0.002;
-  /// Cut side quads of prisms the other way where that raises the worst tets.
-  bool recut = true;
   /// Only inner vertices and quads with a tet at or below the quality of this rank (a fraction
   /// of all tets, worst first) take part in a sweep.
   double worst_fraction = 0.1;
