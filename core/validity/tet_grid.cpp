@@ -424,7 +424,25 @@ void BroadPhase::remove(const std::vector<std::uint32_t>& keys) {
   reenter(slots_of(gone), false);
 }
 
+void BroadPhase::rebuild_cell_slots() {
+  const std::size_t n_cells = grid_.num_cells();
+  std::vector<std::uint64_t> start(n_cells + 1, 0);
+  for (std::uint32_t s = 0; s < state_.size(); ++s)
+    for (const std::uint32_t* c = slot_cells_.begin(s); c != slot_cells_.end(s); ++c)
+      ++start[*c + 1];
+  for (std::size_t c = 0; c < n_cells; ++c) start[c + 1] += start[c];
+  std::vector<std::uint32_t> items(start[n_cells]);
+  std::vector<std::uint64_t> fill(start.begin(), start.end() - 1);
+  for (std::uint32_t s = 0; s < state_.size(); ++s)  // ascending slots: every list in order
+    for (const std::uint32_t* c = slot_cells_.begin(s); c != slot_cells_.end(s); ++c)
+      items[fill[*c]++] = s;
+  cell_slots_.assign(std::move(start), std::move(items));
+}
+
 void BroadPhase::reenter(const std::vector<std::uint32_t>& slots, bool was_empty) {
+  // When many groups move, editing their cells' lists one by one costs more than building every
+  // list again from the groups' own lists, which is done then.
+  const bool rebuild = !was_empty && slots.size() * kRebuildShare >= state_.size();
   // Out of the grid: the cells they were in lose them, each cell's list edited once.
   if (!was_empty) {
     std::vector<std::uint8_t> drop(state_.size(), 0);
@@ -445,9 +463,11 @@ void BroadPhase::reenter(const std::vector<std::uint32_t>& slots, bool was_empty
       stray_slots_.erase(std::remove_if(stray_slots_.begin(), stray_slots_.end(),
                                         [&](std::uint32_t s) { return drop[s] != 0; }),
                          stray_slots_.end());
-    parallel_sort(cells.begin(), cells.end());  // equal cells are the same value
-    cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
-    for (const std::uint32_t c : cells) cell_slots_.erase_flagged(c, drop);
+    if (!rebuild) {
+      parallel_sort(cells.begin(), cells.end());  // equal cells are the same value
+      cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+      for (const std::uint32_t c : cells) cell_slots_.erase_flagged(c, drop);
+    }
   }
   // Back in, with the cells of their present tets.
   const std::size_t n = slots.size();
@@ -509,6 +529,12 @@ void BroadPhase::reenter(const std::vector<std::uint32_t>& slots, bool was_empty
     invert_cells(start, cells, slots, grid_.num_cells(), cell_start, items);
     cell_slots_.assign(std::move(cell_start), std::move(items));
     slot_cells_.assign(std::move(slot_start), std::move(cells));  // slots ascending: in order
+    return;
+  }
+  if (rebuild) {
+    for (std::size_t i = 0; i < n; ++i)
+      slot_cells_.set(slots[i], cells.data() + start[i], start[i + 1] - start[i]);
+    rebuild_cell_slots();
     return;
   }
   // Every (cell, slot) entry, by cell and then slot: each cell's list is merged once.

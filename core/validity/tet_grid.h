@@ -206,6 +206,10 @@ class BroadPhase {
   // its present tets, if it has any. `was_empty`: no group was in the grid (every list is built
   // in one pass).
   void reenter(const std::vector<std::uint32_t>& slots, bool was_empty);
+  // Builds every cell's list of slots again from the slots' lists of cells.
+  void rebuild_cell_slots();
+  // reenter() rebuilds every cell's list when at least 1 / kRebuildShare of the slots move.
+  static constexpr std::size_t kRebuildShare = 6;
 
   const SurfaceMesh& surface_;
   TetGrid grid_;

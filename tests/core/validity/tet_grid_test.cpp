@@ -1,6 +1,7 @@
 // tet_grid_test.cpp — the broad phase (tet_grid.h): the cells TetGrid gives a tet hold every
 // point of it and are those of a test of every cell of its box; PooledLists, the cell lists:
-// edits of many values at once keep every list ascending and leave the other lists alone.
+// edits of many values at once keep every list ascending and leave the other lists alone;
+// BroadPhase: tets moved, few or many, meet the groups that tets entered afresh meet.
 #include "core/validity/tet_grid.h"
 
 #include <gtest/gtest.h>
@@ -8,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <numeric>
 #include <random>
 #include <vector>
 
@@ -110,6 +112,56 @@ TEST(PooledLists, ManyMergesSurviveCompaction) {
     expected[s].push_back(v);
   }
   for (std::size_t s = 0; s < 4; ++s) EXPECT_EQ(list_of(lists, s), expected[s]);
+}
+
+// Removing tets, giving them new places and entering them again edits the cell lists of the
+// cells concerned when few move, and builds every list again when many do: either way each
+// group must meet exactly the groups it meets in a phase that enters every tet at its new place.
+TEST(BroadPhase, MovedTetsMeetTheGroupsOfTetsEnteredAfresh) {
+  const SurfaceMesh surface;
+  const BBox box{{0, 0, 0}, {1, 1, 1}};
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const auto random_tet = [&] {
+    std::array<Vec3d, 4> p;
+    p[0] = Vec3d{0.05 + 0.9 * u(rng), 0.05 + 0.9 * u(rng), 0.05 + 0.9 * u(rng)};
+    for (int k = 1; k < 4; ++k)
+      p[k] = p[0] + Vec3d{0.08 * (u(rng) - 0.5), 0.08 * (u(rng) - 0.5), 0.08 * (u(rng) - 0.5)};
+    return tet_geometry(p);
+  };
+  const std::uint32_t n = 600;
+  std::vector<TetGeometry> start(n);
+  for (TetGeometry& g : start) g = random_tet();
+  std::vector<std::uint32_t> all(n);
+  std::iota(all.begin(), all.end(), 0u);
+  const auto met = [&](const BroadPhase& phase, std::uint32_t slot) {
+    std::vector<std::uint32_t> mark(phase.slot_count(), 0), out;
+    phase.for_each_group_near(slot, false, mark, 1, [&](std::uint32_t s) { out.push_back(s); });
+    std::sort(out.begin(), out.end());
+    return out;
+  };
+  for (const std::uint32_t moved : {10u, 20u, n / 2, n}) {
+    SCOPED_TRACE(std::to_string(moved) + " tets moved");
+    BroadPhase edited(surface, box, 0.05, start, false);
+    edited.insert(all);
+    std::vector<TetGeometry> now = start;
+    std::vector<std::uint32_t> keys;
+    for (std::uint32_t k = 0; k < moved; ++k) keys.push_back(k * (n / moved));
+    for (const std::uint32_t k : keys) now[k] = random_tet();
+    edited.remove(keys);
+    for (const std::uint32_t k : keys) edited.set_geometry(k, now[k]);
+    edited.insert(keys);
+    BroadPhase fresh(surface, box, 0.05, start, false);  // the same slots
+    for (std::uint32_t k = 0; k < n; ++k) fresh.set_geometry(k, now[k]);
+    fresh.insert(all);
+    std::size_t pairs = 0;
+    for (std::uint32_t slot = 0; slot < n; ++slot) {
+      const std::vector<std::uint32_t> expected = met(fresh, slot);
+      ASSERT_EQ(met(edited, slot), expected) << "slot " << slot;
+      pairs += expected.size();
+    }
+    EXPECT_GT(pairs, 2 * std::size_t{n});  // the tets do meet others
+  }
 }
 
 }  // namespace
