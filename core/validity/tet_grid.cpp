@@ -3,7 +3,6 @@
 
 #include <array>
 #include <cmath>
-#include <numeric>
 #include <utility>
 
 #include "core/base/parallel.h"
@@ -288,19 +287,20 @@ std::vector<std::uint32_t> collect_cells(std::size_t n, const Bound& bound, cons
   return cells;
 }
 
-// The inverse of collect_cells()'s lists: per cell c, items[cell_start[c], cell_start[c + 1])
-// are the ids of the items listing it (id[i] for item i), in item order.
-template <class Index>
-void invert_cells(const std::vector<std::uint64_t>& start, const std::vector<std::uint32_t>& cells,
-                  const std::vector<std::uint32_t>& id, std::size_t num_cells,
+// The inverse of lists of cells: per cell c, items[cell_start[c], cell_start[c + 1]) are the
+// items i in [0, n) whose list cells_of(i) (a [begin, end) pair of pointers) holds c, ascending.
+template <class Index, class CellsOf>
+void invert_cells(std::size_t n, const CellsOf& cells_of, std::size_t num_cells,
                   std::vector<Index>& cell_start, std::vector<std::uint32_t>& items) {
   cell_start.assign(num_cells + 1, 0);
-  for (const std::uint32_t c : cells) ++cell_start[c + 1];
+  for (std::size_t i = 0; i < n; ++i)
+    for (auto [c, end] = cells_of(i); c != end; ++c) ++cell_start[*c + 1];
   for (std::size_t c = 0; c < num_cells; ++c) cell_start[c + 1] += cell_start[c];
-  items.resize(cells.size());
+  items.resize(cell_start[num_cells]);
   std::vector<Index> fill(cell_start.begin(), cell_start.end() - 1);
-  for (std::size_t i = 0; i + 1 < start.size(); ++i)
-    for (std::uint64_t k = start[i]; k < start[i + 1]; ++k) items[fill[cells[k]]++] = id[i];
+  for (std::size_t i = 0; i < n; ++i)
+    for (auto [c, end] = cells_of(i); c != end; ++c)
+      items[fill[*c]++] = static_cast<std::uint32_t>(i);
 }
 
 // Slots of groups by a Z-order curve through the centres of their boxes (`boxes`, one per group)
@@ -385,9 +385,12 @@ void BroadPhase::enter_triangles() {
         return meets_grid(f) ? grid_.cells_of_triangle(triangle_corners(surface_, f), out) : 0;
       },
       start);
-  std::vector<std::uint32_t> id(n_faces);
-  std::iota(id.begin(), id.end(), 0u);
-  invert_cells(start, cells, id, grid_.num_cells(), triangle_start_, triangle_items_);
+  invert_cells(
+      n_faces,
+      [&](std::size_t f) {
+        return std::pair{cells.data() + start[f], cells.data() + start[f + 1]};
+      },
+      grid_.num_cells(), triangle_start_, triangle_items_);
 }
 
 void BroadPhase::set_geometry(std::uint32_t key, const TetGeometry& g) { geo_[index(key)] = g; }
@@ -425,17 +428,14 @@ void BroadPhase::remove(const std::vector<std::uint32_t>& keys) {
 }
 
 void BroadPhase::rebuild_cell_slots() {
-  const std::size_t n_cells = grid_.num_cells();
-  std::vector<std::uint64_t> start(n_cells + 1, 0);
-  for (std::uint32_t s = 0; s < state_.size(); ++s)
-    for (const std::uint32_t* c = slot_cells_.begin(s); c != slot_cells_.end(s); ++c)
-      ++start[*c + 1];
-  for (std::size_t c = 0; c < n_cells; ++c) start[c + 1] += start[c];
-  std::vector<std::uint32_t> items(start[n_cells]);
-  std::vector<std::uint64_t> fill(start.begin(), start.end() - 1);
-  for (std::uint32_t s = 0; s < state_.size(); ++s)  // ascending slots: every list in order
-    for (const std::uint32_t* c = slot_cells_.begin(s); c != slot_cells_.end(s); ++c)
-      items[fill[*c]++] = s;
+  std::vector<std::uint64_t> start;
+  std::vector<std::uint32_t> items;
+  invert_cells(
+      state_.size(),
+      [&](std::size_t s) {
+        return std::pair{slot_cells_.begin(s), slot_cells_.end(s)};
+      },
+      grid_.num_cells(), start, items);
   cell_slots_.assign(std::move(start), std::move(items));
 }
 
@@ -454,7 +454,7 @@ void BroadPhase::reenter(const std::vector<std::uint32_t>& slots, bool was_empty
       if (state_[slot] == kStray) {
         stray = true;
       } else {
-        cells.insert(cells.end(), slot_cells_.begin(slot), slot_cells_.end(slot));
+        if (!rebuild) cells.insert(cells.end(), slot_cells_.begin(slot), slot_cells_.end(slot));
         slot_cells_.set(slot, nullptr, 0);
       }
       state_[slot] = kAbsent;
@@ -520,20 +520,16 @@ void BroadPhase::reenter(const std::vector<std::uint32_t>& slots, bool was_empty
     state_[slot] = stray[i] ? kStray : (slot_box_[slot].empty() ? kAbsent : kInGrid);
     if (state_[slot] == kStray) stray_slots_.push_back(slot);
   }
-  if (was_empty) {  // every list is empty: all of them in one pass
-    std::vector<std::uint64_t> slot_start(state_.size() + 1, 0);
-    for (std::size_t i = 0; i < n; ++i) slot_start[slots[i] + 1] = start[i + 1] - start[i];
-    for (std::size_t k = 0; k < state_.size(); ++k) slot_start[k + 1] += slot_start[k];
-    std::vector<std::uint64_t> cell_start;
-    std::vector<std::uint32_t> items;
-    invert_cells(start, cells, slots, grid_.num_cells(), cell_start, items);
-    cell_slots_.assign(std::move(cell_start), std::move(items));
-    slot_cells_.assign(std::move(slot_start), std::move(cells));  // slots ascending: in order
-    return;
-  }
-  if (rebuild) {
-    for (std::size_t i = 0; i < n; ++i)
-      slot_cells_.set(slots[i], cells.data() + start[i], start[i + 1] - start[i]);
+  if (was_empty || rebuild) {
+    if (was_empty) {  // every list is empty: all of them in one pass
+      std::vector<std::uint64_t> slot_start(state_.size() + 1, 0);
+      for (std::size_t i = 0; i < n; ++i) slot_start[slots[i] + 1] = start[i + 1] - start[i];
+      for (std::size_t k = 0; k < state_.size(); ++k) slot_start[k + 1] += slot_start[k];
+      slot_cells_.assign(std::move(slot_start), std::move(cells));  // slots ascending: in order
+    } else {
+      for (std::size_t i = 0; i < n; ++i)
+        slot_cells_.set(slots[i], cells.data() + start[i], start[i + 1] - start[i]);
+    }
     rebuild_cell_slots();
     return;
   }
