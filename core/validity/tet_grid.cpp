@@ -64,56 +64,50 @@ std::size_t TetGrid::cells_in(const BBox& box, const std::array<Slab, N>& slabs,
     lo[a] = cell_of(box.lo[a], a);
     hi[a] = cell_of(box.hi[a], a);
   }
-  std::array<double, N> reach;  // the cells' half extent along each slab's normal
+  // A cell is kept when, for every slab, its centre c has lo - reach <= dot(n, c) <= hi + reach
+  // (reach: the cell's half extent along n). Along a column (i, j) that bounds the centres' z, so
+  // the kept cells of a column are one run of k, found from the slabs alone. Each slab's run is
+  // widened by margin[f] cells, far more than its arithmetic rounds (relative to the magnitude
+  // of the coordinates, divided by n.z), so that it holds every cell the test would keep.
+  double magnitude = 0.0;
+  for (int a = 0; a < 3; ++a)
+    magnitude += std::max({std::abs(box_.lo[a]), std::abs(box.lo[a]), std::abs(box.hi[a])});
+  std::array<double, N> reach, inv_nz, margin;
   for (std::size_t f = 0; f < N; ++f) {
     const Vec3d& n = slabs[f].n;
     reach[f] = 0.5 * cell_ * (std::abs(n.x) + std::abs(n.y) + std::abs(n.z));
+    inv_nz[f] = n.z != 0.0 ? 1.0 / n.z : 0.0;
+    margin[f] = 1e-9 + 1e-13 * (magnitude + std::abs(slabs[f].lo) + std::abs(slabs[f].hi)) *
+                           std::abs(inv_nz[f]) * inv_cell_;
   }
-  const auto centre = [&](long i, long j, long k) {
-    return box_.lo + Vec3d{(static_cast<double>(i) + 0.5) * cell_,
-                           (static_cast<double>(j) + 0.5) * cell_,
-                           (static_cast<double>(k) + 0.5) * cell_};
-  };
-  const auto keep = [&](const Vec3d& c) {
-    for (std::size_t f = 0; f < N; ++f) {
-      const double d = dot(slabs[f].n, c);
-      if (d - reach[f] > slabs[f].hi || d + reach[f] < slabs[f].lo) return false;
-    }
-    return true;
-  };
   std::size_t count = 0;
-  for (long i = lo[0]; i <= hi[0]; ++i)
+  for (long i = lo[0]; i <= hi[0]; ++i) {
+    const double x = box_.lo.x + (static_cast<double>(i) + 0.5) * cell_;
     for (long j = lo[1]; j <= hi[1]; ++j) {
-      long first = lo[2], last = hi[2];
-      if (last - first >= 4) {
-        // Each slab bounds the centres' z along the column: the run of k between those bounds,
-        // one cell wider (a short column is taken whole).
-        const Vec3d c = centre(i, j, 0);
-        double k_lo = static_cast<double>(first), k_hi = static_cast<double>(last);
-        for (std::size_t f = 0; f < N && k_lo <= k_hi; ++f) {
-          const Slab& s = slabs[f];
-          const double across = s.n.x * c.x + s.n.y * c.y;
-          const double z_lo = s.lo - reach[f] - across, z_hi = s.hi + reach[f] - across;
-          if (s.n.z == 0.0) {
-            if (z_lo > 0.0 || z_hi < 0.0) k_lo = k_hi + 1.0;
-            continue;
-          }
-          const double a = z_lo / s.n.z, b = z_hi / s.n.z;  // z of the centres, either order
-          k_lo = std::max(k_lo, std::floor((std::min(a, b) - box_.lo.z) * inv_cell_ - 0.5) - 1.0);
-          k_hi = std::min(k_hi, std::ceil((std::max(a, b) - box_.lo.z) * inv_cell_ - 0.5) + 1.0);
+      const double y = box_.lo.y + (static_cast<double>(j) + 0.5) * cell_;
+      // The run's ends as cell coordinates (k + 0.5 at a centre), from every slab.
+      double k_lo = static_cast<double>(lo[2]), k_hi = static_cast<double>(hi[2]);
+      for (std::size_t f = 0; f < N && k_lo <= k_hi; ++f) {
+        const Slab& s = slabs[f];
+        const double across = s.n.x * x + s.n.y * y;
+        const double z_lo = s.lo - reach[f] - across, z_hi = s.hi + reach[f] - across;
+        if (s.n.z == 0.0) {
+          if (z_lo > 0.0 || z_hi < 0.0) k_hi = k_lo - 1.0;
+          continue;
         }
-        if (!(k_lo <= k_hi)) continue;
-        first = static_cast<long>(k_lo);
-        last = static_cast<long>(k_hi);
+        const double a = (z_lo * inv_nz[f] - box_.lo.z) * inv_cell_ - 0.5,
+                     b = (z_hi * inv_nz[f] - box_.lo.z) * inv_cell_ - 0.5;  // either order
+        k_lo = std::max(k_lo, std::ceil(std::min(a, b) - margin[f]));
+        k_hi = std::min(k_hi, std::floor(std::max(a, b) + margin[f]));
       }
-      // The kept cells are one run: trimmed at both ends by the cell test itself.
-      while (first <= last && !keep(centre(i, j, first))) ++first;
-      while (last >= first && !keep(centre(i, j, last))) --last;
+      if (!(k_lo <= k_hi)) continue;
+      const long first = static_cast<long>(k_lo), last = static_cast<long>(k_hi);
       for (long k = first; k <= last; ++k) {
         if (out) out[count] = static_cast<std::uint32_t>((i * dims_[1] + j) * dims_[2] + k);
         ++count;
       }
     }
+  }
   return count;
 }
 

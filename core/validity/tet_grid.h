@@ -58,7 +58,7 @@ class TetGrid {
   };
   // Cells of `box` (clamped to the grid) that no slab separates from its body: a cell is kept
   // unless its centre c has dot(n, c) beyond [lo, hi] by more than the cell's half extent along
-  // n. The kept cells of a column (i, j) are one run of k, found from its ends.
+  // n. The kept cells of a column (i, j) are one run of k, whose ends the slabs give.
   template <std::size_t N>
   std::size_t cells_in(const BBox& box, const std::array<Slab, N>& slabs, std::uint32_t* out) const;
   long cell_of(double x, int axis) const;

@@ -16,11 +16,12 @@
 namespace vdb_shell {
 namespace {
 
-TEST(TetGrid, CellsOfATetHoldItAndAreThoseNoFacePlaneSeparates) {
-  // Random tets over a 20^3 grid: small ones, large ones, and needles in every direction (whose
-  // cells are found column by column); each tet's cells must hold 2,000 points sampled in it, and
-  // equal the cells of its box that pass the plane test one by one.
-  const BBox box{{-1, -2, -1.5}, {1, 0, 0.5}};
+// Random tets over a 20^3 grid whose corner is `offset` from the origin: small ones, large ones,
+// and needles in every direction (whose cells are found column by column); each tet's cells must
+// hold 2,000 points sampled in it and, with `exact`, equal the cells of its box that pass the
+// plane test one by one.
+void check_cells_of_random_tets(const Vec3d& offset, bool exact) {
+  const BBox box{Vec3d{-1, -2, -1.5} + offset, Vec3d{1, 0, 0.5} + offset};
   const double h = 0.1;
   const TetGrid grid(box, h);
   ASSERT_EQ(grid.num_cells(), 8000u);
@@ -57,6 +58,7 @@ TEST(TetGrid, CellsOfATetHoldItAndAreThoseNoFacePlaneSeparates) {
       for (int k = 0; k < 4; ++k) q = q + p[k] * (w[k] / sum);
       ASSERT_TRUE(std::binary_search(cells.begin(), cells.end(), cell_at(q)));
     }
+    if (!exact) continue;
     std::vector<std::uint32_t> tested;
     const auto lo = cell_at(g.box.lo), hi = cell_at(g.box.hi);
     for (std::uint32_t i = lo / 400; i <= hi / 400; ++i)
@@ -74,6 +76,15 @@ TEST(TetGrid, CellsOfATetHoldItAndAreThoseNoFacePlaneSeparates) {
         }
     EXPECT_EQ(cells, tested);
   }
+}
+
+TEST(TetGrid, CellsOfATetHoldItAndAreThoseNoFacePlaneSeparates) {
+  check_cells_of_random_tets(Vec3d{}, true);
+}
+
+TEST(TetGrid, CellsOfATetFarFromTheOriginHoldIt) {
+  // At 1e6 the coordinates round at 1e-10: the runs of cells must still hold every tet.
+  check_cells_of_random_tets(Vec3d{1e6, -3e6, 2e6}, false);
 }
 
 std::vector<std::uint32_t> list_of(const PooledLists& lists, std::size_t s) {
