@@ -90,13 +90,6 @@ struct ShellChecker::Impl {
                        " triangles");
   }
 
-  // The new tets of the prisms that moved: prism i is faces[i], its tets' geometry
-  // geo[P i, P i + count[i]).
-  struct MovedPrisms {
-    std::vector<std::uint32_t> faces, count;
-    std::vector<TetGeometry> geo;
-  };
-
   const SurfaceMesh& surface;
   ShellCheckOptions options;
   std::uint32_t per_prism;  // P: the most tets of a prism
@@ -113,7 +106,7 @@ struct ShellChecker::Impl {
                           ShellCheckResult& result);
   std::vector<std::uint8_t> changed_prisms(const TetMesh& mesh,
                                            const std::vector<std::uint32_t>& first) const;
-  void build_phase(MovedPrisms all);
+  void build_phase(const TetMesh& mesh, const std::vector<std::uint32_t>& first);
   void move_prisms(const TetMesh& mesh, const std::vector<std::uint32_t>& first,
                    const std::vector<std::uint32_t>& moved);
   void check_intersections(const TetMesh& mesh, const std::vector<std::uint32_t>& first,
@@ -175,24 +168,20 @@ std::vector<std::uint8_t> ShellChecker::Impl::changed_prisms(
   return changed;
 }
 
-// The phase, over the surface's box and the first shell's tets `all` (every prism), with a 5%
-// margin, and those tets in it.
-void ShellChecker::Impl::build_phase(MovedPrisms all) {
+// The phase, over the surface's box and the tets of the first shell `mesh` (every prism), with a
+// 5% margin, and those tets in it.
+void ShellChecker::Impl::build_phase(const TetMesh& mesh, const std::vector<std::uint32_t>& first) {
   const std::uint32_t P = per_prism;
-  std::vector<TetGeometry> by_key;  // absent keys: empty boxes
-  if (all.faces.size() == surface.triangles.size()) {
-    by_key = std::move(all.geo);  // every prism in order (the first call): already by key
-  } else {
-    by_key.resize(P * surface.triangles.size());
-    for_each_index(all.faces.size(), [&](std::size_t i) {
-      for (std::uint32_t k = 0; k < all.count[i]; ++k)
-        by_key[P * all.faces[i] + k] = all.geo[P * i + k];
-    });
-  }
+  const std::size_t n_faces = first.size() - 1;
+  std::vector<TetGeometry> by_key(P * n_faces);  // absent keys: empty boxes
+  for_each_index(n_faces, [&](std::size_t f) {
+    for (std::uint32_t t = first[f]; t < first[f + 1]; ++t)
+      by_key[P * f + (t - first[f])] = tet_geometry(tet_corners(mesh, t));
+  });
   std::vector<std::uint32_t> keys;
-  for (std::size_t i = 0; i < all.faces.size(); ++i) {
-    for (std::uint32_t k = 0; k < all.count[i]; ++k) keys.push_back(P * all.faces[i] + k);
-    tet_count[all.faces[i]] = static_cast<std::uint8_t>(all.count[i]);
+  for (std::uint32_t f = 0; f < n_faces; ++f) {
+    tet_count[f] = static_cast<std::uint8_t>(first[f + 1] - first[f]);
+    for (std::uint32_t k = 0; k < tet_count[f]; ++k) keys.push_back(P * f + k);
   }
   BBox box = bounding_box(surface);
   const BBox tets = bounding_box_of(by_key);
@@ -206,37 +195,24 @@ void ShellChecker::Impl::build_phase(MovedPrisms all) {
   phase->insert(keys);
 }
 
-// The tets of the prisms `moved` to their new places (geometry in parallel, then the phase's
-// lists); builds the phase at the first call.
+// The tets of the prisms `moved` to their new places: out of the phase, their new geometry set in
+// parallel (straight into the phase's own), back in.
 void ShellChecker::Impl::move_prisms(const TetMesh& mesh, const std::vector<std::uint32_t>& first,
                                      const std::vector<std::uint32_t>& moved) {
   const std::uint32_t P = per_prism;
-  MovedPrisms fresh;
-  fresh.faces = moved;
-  fresh.count.resize(moved.size());
-  fresh.geo.resize(P * moved.size());
-  for_each_index(moved.size(), [&](std::size_t i) {
-    const std::uint32_t f = moved[i];
-    fresh.count[i] = first[f + 1] - first[f];
-    for (std::uint32_t t = first[f]; t < first[f + 1]; ++t)
-      fresh.geo[P * i + (t - first[f])] = tet_geometry(tet_corners(mesh, t));
-  });
-  if (!phase) {
-    build_phase(std::move(fresh));
-    return;
-  }
   std::vector<std::uint32_t> keys;
   for (const std::uint32_t f : moved)
     for (std::uint32_t k = 0; k < tet_count[f]; ++k) keys.push_back(P * f + k);
   phase->remove(keys);
-  keys.clear();
-  for (std::size_t i = 0; i < moved.size(); ++i) {
+  for_each_index(moved.size(), [&](std::size_t i) {
     const std::uint32_t f = moved[i];
-    for (std::uint32_t k = 0; k < fresh.count[i]; ++k) {
-      keys.push_back(P * f + k);
-      phase->set_geometry(keys.back(), fresh.geo[P * i + k]);
-    }
-    tet_count[f] = static_cast<std::uint8_t>(fresh.count[i]);
+    for (std::uint32_t t = first[f]; t < first[f + 1]; ++t)
+      phase->set_geometry(P * f + (t - first[f]), tet_geometry(tet_corners(mesh, t)));
+  });
+  keys.clear();
+  for (const std::uint32_t f : moved) {
+    tet_count[f] = static_cast<std::uint8_t>(first[f + 1] - first[f]);
+    for (std::uint32_t k = 0; k < tet_count[f]; ++k) keys.push_back(P * f + k);
   }
   phase->insert(keys);
 }
@@ -285,7 +261,10 @@ ShellCheckResult ShellChecker::check(const TetMesh& mesh) {
       if (changed[f]) moved.push_back(f);
       if (changed[f] || m.offended[f]) dirty.push_back(f);
     }
-    m.move_prisms(mesh, first, moved);
+    if (m.phase)
+      m.move_prisms(mesh, first, moved);
+    else  // the first call: every prism
+      m.build_phase(mesh, first);
     m.check_intersections(mesh, first, dirty, result);
   }
   result.seconds = seconds_since(start);

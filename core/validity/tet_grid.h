@@ -139,7 +139,8 @@ class BroadPhase {
   BroadPhase(const SurfaceMesh& surface, const BBox& box, double cell_size,
              std::vector<TetGeometry> geometry, bool enter_triangles, std::uint32_t group_size = 1);
 
-  /// Gives tet `key` the geometry `g`. \pre !contains(key)
+  /// Gives tet `key` the geometry `g`; calls for distinct keys may run concurrently.
+  /// \pre !contains(key)
   void set_geometry(std::uint32_t key, const TetGeometry& g);
   /// Enters the tets `keys` (distinct, absent) at their geometry. Their groups' cells are found
   /// in parallel; into an empty phase the cell lists are built in one pass.
