@@ -1,23 +1,29 @@
 # Installation: `cmake --install build --prefix P` puts the library, its headers, both
-# executables, the .vdb reader program, the Python module and a CMake package under P, so that
-# an outside project can
+# executables, the programs of libexec/vdb_shell, the Python module and a CMake package under P,
+# so that an outside project can
 #   find_package(vdb_shell REQUIRED)
 #   target_link_libraries(app PRIVATE vdb_shell::vdb_shell)
 # The library links OpenVDB and TBB privately: the package needs none of them.
 include(CMakePackageConfigHelpers)
 
 set(VDB_SHELL_INSTALL_CMAKEDIR ${CMAKE_INSTALL_LIBDIR}/cmake/vdb_shell)
-# The executables find libvdb_shell.so next to them, wherever the tree is installed.
-set_target_properties(vdb_shell vdb_shell_shapes PROPERTIES
+# The executables find libvdb_shell.so from where they are, wherever the tree is installed.
+set_target_properties(vdb_shell_shapes PROPERTIES
   INSTALL_RPATH "$ORIGIN/../${CMAKE_INSTALL_LIBDIR}")
+file(RELATIVE_PATH _vdb_shell_libdir_from_program "/prefix/${CMAKE_INSTALL_LIBEXECDIR}/vdb_shell"
+     "/prefix/${CMAKE_INSTALL_LIBDIR}")
+set_target_properties(vdb_shell_program PROPERTIES
+  INSTALL_RPATH "$ORIGIN/${_vdb_shell_libdir_from_program}")
 
 install(TARGETS vdb_shell_lib EXPORT vdb_shell_targets
   LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
   RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR}
   INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 install(TARGETS vdb_shell vdb_shell_shapes RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
-# The .vdb reader program, where the library looks for it (vdb_ops/CMakeLists.txt).
-install(TARGETS vdb_shell_vdb_reader RUNTIME DESTINATION ${CMAKE_INSTALL_LIBEXECDIR}/vdb_shell)
+# The program the command starts (cli/CMakeLists.txt) and the .vdb reader program, where the
+# library looks for it (vdb_ops/CMakeLists.txt).
+install(TARGETS vdb_shell_program vdb_shell_vdb_reader
+  RUNTIME DESTINATION ${CMAKE_INSTALL_LIBEXECDIR}/vdb_shell)
 
 # The public header and the headers of the types it hands out (none includes a dependency's).
 install(FILES include/vdb_shell/vdb_shell.h DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/vdb_shell)
