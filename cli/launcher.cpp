@@ -49,7 +49,7 @@ int main(int, char** argv) {
   const char* tunables = std::getenv("GLIBC_TUNABLES");
   if (!tunables || !*tunables) {
     setenv("GLIBC_TUNABLES", "glibc.malloc.hugetlb=1", 1);
-  } else if (!std::strstr(tunables, kTunable)) {
+  } else if (!std::strstr(tunables, kTunable)) {  // (one too long to extend is left alone)
     static char joined[4096];
     if (std::snprintf(joined, sizeof joined, "%s:%s=1", tunables, kTunable) <
         static_cast<int>(sizeof joined))
