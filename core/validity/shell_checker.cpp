@@ -106,7 +106,12 @@ struct ShellChecker::Impl {
                           ShellCheckResult& result);
   std::vector<std::uint8_t> changed_prisms(const TetMesh& mesh,
                                            const std::vector<std::uint32_t>& first) const;
-  void build_phase(const TetMesh& mesh, const std::vector<std::uint32_t>& first);
+  std::vector<std::uint32_t> keys_of(const std::vector<std::uint32_t>& prisms) const;
+  template <class Set>
+  void tet_geometries(const TetMesh& mesh, const std::vector<std::uint32_t>& first,
+                      const std::vector<std::uint32_t>& prisms, const Set& set);
+  void build_phase(const TetMesh& mesh, const std::vector<std::uint32_t>& first,
+                   const std::vector<std::uint32_t>& all);
   void move_prisms(const TetMesh& mesh, const std::vector<std::uint32_t>& first,
                    const std::vector<std::uint32_t>& moved);
   void check_intersections(const TetMesh& mesh, const std::vector<std::uint32_t>& first,
@@ -168,21 +173,37 @@ std::vector<std::uint8_t> ShellChecker::Impl::changed_prisms(
   return changed;
 }
 
-// The phase, over the surface's box and the tets of the first shell `mesh` (every prism), with a
-// 5% margin, and those tets in it.
-void ShellChecker::Impl::build_phase(const TetMesh& mesh, const std::vector<std::uint32_t>& first) {
-  const std::uint32_t P = per_prism;
-  const std::size_t n_faces = first.size() - 1;
-  std::vector<TetGeometry> by_key(P * n_faces);  // absent keys: empty boxes
-  for_each_index(n_faces, [&](std::size_t f) {
-    for (std::uint32_t t = first[f]; t < first[f + 1]; ++t)
-      by_key[P * f + (t - first[f])] = tet_geometry(tet_corners(mesh, t));
-  });
+// The keys in `phase` of the tets of `prisms` (tet_count of each).
+std::vector<std::uint32_t> ShellChecker::Impl::keys_of(
+    const std::vector<std::uint32_t>& prisms) const {
   std::vector<std::uint32_t> keys;
-  for (std::uint32_t f = 0; f < n_faces; ++f) {
+  for (const std::uint32_t f : prisms)
+    for (std::uint32_t k = 0; k < tet_count[f]; ++k) keys.push_back(per_prism * f + k);
+  return keys;
+}
+
+// Calls set(key, geometry) for every tet of `prisms` in `mesh`, in parallel (distinct keys), and
+// makes tet_count theirs.
+template <class Set>
+void ShellChecker::Impl::tet_geometries(const TetMesh& mesh,
+                                        const std::vector<std::uint32_t>& first,
+                                        const std::vector<std::uint32_t>& prisms, const Set& set) {
+  for_each_index(prisms.size(), [&](std::size_t i) {
+    const std::uint32_t f = prisms[i];
+    for (std::uint32_t t = first[f]; t < first[f + 1]; ++t)
+      set(per_prism * f + (t - first[f]), tet_geometry(tet_corners(mesh, t)));
+  });
+  for (const std::uint32_t f : prisms)
     tet_count[f] = static_cast<std::uint8_t>(first[f + 1] - first[f]);
-    for (std::uint32_t k = 0; k < tet_count[f]; ++k) keys.push_back(P * f + k);
-  }
+}
+
+// The phase, over the surface's box and the tets of the first shell `mesh` (`all` its prisms),
+// with a 5% margin, and those tets in it.
+void ShellChecker::Impl::build_phase(const TetMesh& mesh, const std::vector<std::uint32_t>& first,
+                                     const std::vector<std::uint32_t>& all) {
+  std::vector<TetGeometry> by_key(per_prism * all.size());  // absent keys: empty boxes
+  tet_geometries(mesh, first, all,
+                 [&](std::uint32_t key, const TetGeometry& g) { by_key[key] = g; });
   BBox box = bounding_box(surface);
   const BBox tets = bounding_box_of(by_key);
   box.expand(tets.lo);
@@ -191,30 +212,18 @@ void ShellChecker::Impl::build_phase(const TetMesh& mesh, const std::vector<std:
   box.expand(box.lo - Vec3d{margin, margin, margin});
   box.expand(box.hi + Vec3d{margin, margin, margin});
   phase = std::make_unique<BroadPhase>(surface, box, grid_cell_size(by_key, box), std::move(by_key),
-                                       options.check_leaks, P);
-  phase->insert(keys);
+                                       options.check_leaks, per_prism);
+  phase->insert(keys_of(all));
 }
 
 // The tets of the prisms `moved` to their new places: out of the phase, their new geometry set in
 // parallel (straight into the phase's own), back in.
 void ShellChecker::Impl::move_prisms(const TetMesh& mesh, const std::vector<std::uint32_t>& first,
                                      const std::vector<std::uint32_t>& moved) {
-  const std::uint32_t P = per_prism;
-  std::vector<std::uint32_t> keys;
-  for (const std::uint32_t f : moved)
-    for (std::uint32_t k = 0; k < tet_count[f]; ++k) keys.push_back(P * f + k);
-  phase->remove(keys);
-  for_each_index(moved.size(), [&](std::size_t i) {
-    const std::uint32_t f = moved[i];
-    for (std::uint32_t t = first[f]; t < first[f + 1]; ++t)
-      phase->set_geometry(P * f + (t - first[f]), tet_geometry(tet_corners(mesh, t)));
-  });
-  keys.clear();
-  for (const std::uint32_t f : moved) {
-    tet_count[f] = static_cast<std::uint8_t>(first[f + 1] - first[f]);
-    for (std::uint32_t k = 0; k < tet_count[f]; ++k) keys.push_back(P * f + k);
-  }
-  phase->insert(keys);
+  phase->remove(keys_of(moved));
+  tet_geometries(mesh, first, moved,
+                 [&](std::uint32_t key, const TetGeometry& g) { phase->set_geometry(key, g); });
+  phase->insert(keys_of(moved));
 }
 
 // The narrow phase for the tets of the prisms `dirty`; remembers the prisms offending now, to be
@@ -223,9 +232,7 @@ void ShellChecker::Impl::check_intersections(const TetMesh& mesh,
                                              const std::vector<std::uint32_t>& first,
                                              const std::vector<std::uint32_t>& dirty,
                                              ShellCheckResult& result) {
-  std::vector<std::uint32_t> queries;
-  for (const std::uint32_t f : dirty)
-    for (std::uint32_t k = 0; k < tet_count[f]; ++k) queries.push_back(per_prism * f + k);
+  const std::vector<std::uint32_t> queries = keys_of(dirty);
   const std::vector<TetFindings> found = find_intersections(*phase, queries, inside, options);
   const Intersections offenders = record_intersections(
       found, queries, [&](std::uint32_t key) { return first[key / per_prism] + key % per_prism; },
@@ -263,8 +270,8 @@ ShellCheckResult ShellChecker::check(const TetMesh& mesh) {
     }
     if (m.phase)
       m.move_prisms(mesh, first, moved);
-    else  // the first call: every prism
-      m.build_phase(mesh, first);
+    else  // the first call: every prism moved
+      m.build_phase(mesh, first, moved);
     m.check_intersections(mesh, first, dirty, result);
   }
   result.seconds = seconds_since(start);
