@@ -5,6 +5,7 @@
 // Shapes come from assets/shapes.h; fields are built once per shape at 128^3 and shared.
 #include <gtest/gtest.h>
 #include <stdlib.h>
+#include <sys/resource.h>
 #include <tbb/global_control.h>
 
 #include <algorithm>
@@ -534,6 +535,28 @@ TEST(FieldsVdb, CorruptFilesAreBadInputNotACrash) {
     }
   }
   EXPECT_GE(refused, 3u);  // at least the cut files
+}
+
+TEST(FieldsVdb, ASizeACorruptFileClaimsIsRefusedWithinTheReadersAllowance) {
+  // A 38 kB file (found by the .vdb fuzz target) whose grid metadata claims an entry of unknown
+  // type some hundreds of MB long: OpenVDB's reader zero-fills a buffer that size and copies it.
+  // The reader refuses it once it passes its allowance (64 times the file's size, at least
+  // 128 MiB): the largest reader this process started (ru_maxrss of its children) stays below
+  // twice that, where a floor of 1 GiB let it fill 1 GiB.
+  const std::filesystem::path file =
+      std::filesystem::path(VDB_SHELL_FUZZ_REGRESSIONS) / "vdb" / "unknown-metadata-claim";
+  ASSERT_LT(std::filesystem::file_size(file), 2u << 20);
+  try {
+    volume_to_soup(file.string(), "", 0.0, false);
+    ADD_FAILURE() << "the corrupt file was read";
+  } catch (const InputError& e) {
+    // The reader's own message, or under AddressSanitizer (whose allocator aborts the reader
+    // instead of throwing) how the reader ended: either names the file.
+    EXPECT_NE(std::string(e.what()).find(file.string()), std::string::npos) << e.what();
+  }
+  rusage children{};
+  ASSERT_EQ(::getrusage(RUSAGE_CHILDREN, &children), 0);
+  EXPECT_LT(children.ru_maxrss, 256L << 10) << "KiB";  // ru_maxrss is in KiB
 }
 
 /// Sets VDB_SHELL_VDB_READER (the .vdb reader program) for its lifetime.

@@ -157,8 +157,8 @@ using GridSelector = std::function<std::string(const openvdb::GridPtrVec& metas)
 /// that crashes or throws takes only its own process down. It is a program started afresh, not
 /// a fork of this process: a fork's child runs without the parent's other threads, and a lock
 /// one of them held (TBB's, the heap's) would hang it.
-/// The reader may map 64 times the file's size (at least 1 GiB): one asking for more is reading
-/// sizes a corrupt file claims.
+/// The reader runs on one thread and may map 64 times the file's size (at least 128 MiB): one
+/// asking for more is reading sizes a corrupt file claims.
 /// \throw InputError naming the file (what the reader or `select` said, or how it failed);
 ///        ResourceError if the reader cannot be found or started.
 openvdb::GridPtrVecPtr read_vdb_isolated(const std::string& path, const GridSelector& select);
