@@ -74,16 +74,28 @@ InsideTester::InsideTester(const SurfaceMesh& surface, double tolerance)
 }
 
 bool InsideTester::outside(const Vec3d& p) const {
-  for (int axis = 0; axis < 3; ++axis) {
-    switch (cast_ray(axis, p)) {
-      case RayVerdict::kInside:
-      case RayVerdict::kOnSurface:
-        return false;
-      case RayVerdict::kOutside:
-        return true;
-      case RayVerdict::kAmbiguous:
-        break;
+  RayVerdict verdict = cast_rays(p);
+  if (verdict == RayVerdict::kAmbiguous) {
+    // p is farther than the tolerance from the surface (a ray's column lists every triangle
+    // that near, and each was measured), so a point q within p's clearance lies on p's side:
+    // the segment pq meets no triangle. Directions away from the axes and their diagonals.
+    static constexpr std::array<Vec3d, 3> kAway = {Vec3d{0.5401, 0.7318, 0.4157},
+                                                   Vec3d{-0.6923, 0.2549, 0.6751},
+                                                   Vec3d{0.3137, -0.8571, 0.4086}};
+    const double r = 0.5 * clearance(p);
+    for (std::size_t k = 0; k < kAway.size() && verdict == RayVerdict::kAmbiguous; ++k) {
+      verdict = cast_rays(p + r / norm(kAway[k]) * kAway[k]);
+      if (verdict == RayVerdict::kOnSurface) verdict = RayVerdict::kAmbiguous;  // q, not p
     }
+  }
+  switch (verdict) {
+    case RayVerdict::kInside:
+    case RayVerdict::kOnSurface:
+      return false;
+    case RayVerdict::kOutside:
+      return true;
+    case RayVerdict::kAmbiguous:
+      break;
   }
   double winding = 0.0;
   for (const Triangle& t : surface_.triangles)
@@ -175,6 +187,31 @@ InsideTester::RayVerdict InsideTester::cast_ray(int axis, const Vec3d& p) const 
   }
   if (ambiguous) return RayVerdict::kAmbiguous;
   return crossings % 2 == 1 ? RayVerdict::kInside : RayVerdict::kOutside;
+}
+
+InsideTester::RayVerdict InsideTester::cast_rays(const Vec3d& p) const {
+  for (int axis = 0; axis < 3; ++axis)
+    if (const RayVerdict verdict = cast_ray(axis, p); verdict != RayVerdict::kAmbiguous)
+      return verdict;
+  return RayVerdict::kAmbiguous;
+}
+
+double InsideTester::clearance(const Vec3d& p) const {
+  // A triangle listed in none of the 3 x 3 cells has its projected box (grown by the tolerance)
+  // more than a cell's width from p's projection on one coordinate.
+  const ColumnGrid& g = grids_[0];
+  double r2 = 1.0 / (g.inv_cell * g.inv_cell);
+  const long cu = g.cell_u(p[g.u]), cv = g.cell_v(p[g.v]);
+  for (long iu = std::max(cu - 1, 0L); iu <= std::min(cu + 1, g.nu - 1); ++iu)
+    for (long iv = std::max(cv - 1, 0L); iv <= std::min(cv + 1, g.nv - 1); ++iv) {
+      const std::size_t cell = static_cast<std::size_t>(iu * g.nv + iv);
+      for (std::uint32_t k = g.start[cell]; k < g.start[cell + 1]; ++k) {
+        const Triangle& t = surface_.triangles[g.items[k]];
+        r2 = std::min(r2, point_triangle_distance2(p, surface_.points[t[0]], surface_.points[t[1]],
+                                                   surface_.points[t[2]]));
+      }
+    }
+  return std::sqrt(r2);
 }
 
 bool point_outside_surface(const SurfaceMesh& surface, const Vec3d& p, double tolerance) {

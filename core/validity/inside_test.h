@@ -3,10 +3,13 @@
 //
 // Method: the parity of the crossings of an axis-parallel ray, its triangles found in a 2D grid
 // of the triangles' projections (one grid per axis). A ray that passes within the tolerance of a
-// triangle's edge, or meets a triangle seen edge-on, is ambiguous and the next axis is tried;
-// after three ambiguous axes the generalized winding number over all triangles decides. Points
-// within the tolerance of a triangle (exact point-triangle distance) are on the surface, hence
-// not outside.
+// triangle's edge, or meets a triangle seen edge-on, is ambiguous and the next axis is tried.
+// When all three are (the point lines up with edges on every axis, as inner points do on a mesh
+// of axis-aligned faces), the same rays are cast from a few points near it, off those lines, no
+// farther than its clearance from the surface: each lies on its side. Only when those are
+// ambiguous too does the generalized winding number over all triangles decide. Points within
+// the tolerance of a triangle (exact point-triangle distance) are on the surface, hence not
+// outside.
 //
 // Internal to core/validity (not installed); point_outside_surface() (shell_checks.h) is the
 // public one-point call.
@@ -48,6 +51,11 @@ class InsideTester {
   void build(int axis);
   // Parity of the crossings of the ray from p towards +axis.
   RayVerdict cast_ray(int axis, const Vec3d& p) const;
+  // The first verdict of the three axes' rays from p that is not ambiguous.
+  RayVerdict cast_rays(const Vec3d& p) const;
+  // A distance from p within which no triangle lies: the nearest triangle listed in the 3 x 3
+  // cells of axis 0's grid around p, else a cell's width (any other triangle is farther).
+  double clearance(const Vec3d& p) const;
 
   const SurfaceMesh& surface_;
   double tolerance_;

@@ -200,6 +200,31 @@ TEST(ShellChecks, PointInSphereAgreesWithRadius) {
   EXPECT_TRUE(point_outside_surface(s, {0, 0, 0.6}, 1e-9));
 }
 
+TEST(ShellChecks, PointsInLineWithEdgesOnEveryAxisAreJudgedFromPointsNearThem) {
+  // The box at detail 5 has its vertices on a lattice of step 0.1. A point on lattice lines in
+  // two coordinates and 0.004 from a face in the third has every axis ray running along edges,
+  // so its verdict comes from rays cast from points within its clearance (0.004): the points
+  // just inside each face must stay inside (a shift past the clearance would carry some out),
+  // those just outside must stay outside.
+  const SurfaceMesh s = make_shape("box", 5);
+  ASSERT_EQ(s.triangles.size(), 1200u);
+  int tested = 0;
+  for (int axis = 0; axis < 3; ++axis)
+    for (const double side : {-1.0, 1.0})
+      for (int i = -4; i <= 4; i += 2)
+        for (int j = -4; j <= 4; j += 2)
+          for (const double delta : {-0.004, 0.004}) {  // inside, outside
+            Vec3d p;
+            p[(axis + 1) % 3] = 0.1 * i;
+            p[(axis + 2) % 3] = 0.1 * j;
+            p[axis] = side * (0.5 + delta);
+            EXPECT_EQ(point_outside_surface(s, p, 1e-9), delta > 0.0)
+                << p.x << " " << p.y << " " << p.z;
+            ++tested;
+          }
+  EXPECT_EQ(tested, 300);
+}
+
 TEST(ShellChecks, MissingSharedAndMisorientedTriangles) {
   const SurfaceMesh s = make_shape("box", 1);
   const TetMesh valid = scaled_shell(s, 0.5);
