@@ -3,7 +3,8 @@
 //   * check_steps.h: the checks of single elements (volumes, surface points, boundary faces,
 //     inner points) and the recording of the intersections, shared with ShellChecker
 //     (shell_checker.cpp);
-//   * inside_test.h: point inside the surface (ray parity, winding number when ambiguous);
+//   * inside_test.h: point inside the surface (ray parity; when ambiguous, rays from points
+//     near it, then the winding number);
 //   * tet_grid.h, tet_intersections.h: the broad and the narrow phase of the overlap and leak
 //     tests, shared with ShellChecker; tet_predicates.h: the separating-axis tests.
 #include "core/validity/shell_checks.h"
