@@ -7,7 +7,6 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/base/parallel.h"
 #include "core/base/tet_mesh.h"
 
 namespace vdb_shell {
@@ -35,34 +34,9 @@ inline std::array<std::uint32_t, 3> sorted3(std::uint32_t a, std::uint32_t b, st
   return k;
 }
 
-/// The 4T faces of the tets in FaceRecord order (equal faces next to each other), sorted in two
-/// steps: by smallest vertex (counting sort), then within each (small) bucket, the buckets in
-/// parallel (each its own range: the same order for any thread count).
-inline std::vector<FaceRecord> sorted_tet_faces(const TetMesh& mesh) {
-  const std::size_t n_points = mesh.points.size();
-  std::vector<std::uint32_t> bucket(n_points + 1, 0);
-  for (const Tet& v : mesh.tets)
-    for (const int* f : kTetOutwardFace) ++bucket[std::min({v[f[0]], v[f[1]], v[f[2]]}) + 1];
-  for (std::size_t p = 0; p < n_points; ++p) bucket[p + 1] += bucket[p];
-  std::vector<FaceRecord> faces(4 * mesh.tets.size());
-  std::vector<std::uint32_t> fill(bucket.begin(), bucket.end() - 1);
-  for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
-    const Tet& v = mesh.tets[t];
-    for (int k = 0; k < 4; ++k) {
-      const int* f = kTetOutwardFace[k];
-      const std::array<std::uint32_t, 3> key = sorted3(v[f[0]], v[f[1]], v[f[2]]);
-      faces[fill[key[0]]++] = {key, static_cast<std::uint32_t>(t), static_cast<std::uint8_t>(k)};
-    }
-  }
-  for_each_chunk(
-      n_points,
-      [&](std::size_t begin, std::size_t end) {
-        for (std::size_t p = begin; p != end; ++p)
-          if (bucket[p + 1] - bucket[p] > 1)
-            std::sort(faces.begin() + bucket[p], faces.begin() + bucket[p + 1]);
-      },
-      4096);
-  return faces;
-}
+/// The 4T faces of the tets in FaceRecord order (equal faces next to each other). Every step runs
+/// in parallel over fixed blocks; since FaceRecord's order is total, the result is the same for
+/// any thread count.
+std::vector<FaceRecord> sorted_tet_faces(const TetMesh& mesh);
 
 }  // namespace vdb_shell

@@ -2,6 +2,7 @@
 #include "core/validity/check_steps.h"
 
 #include <algorithm>
+#include <functional>
 #include <string>
 
 #include "core/base/errors.h"
@@ -98,12 +99,14 @@ void count_volumes(const TetMesh& mesh, const ShellCheckOptions& options,
 void check_boundary_faces(const SurfaceMesh& surface, const TetMesh& mesh,
                           const ShellCheckOptions& options, ShellCheckResult& result) {
   const std::vector<FaceRecord> faces = sorted_tet_faces(mesh);
-  for (std::size_t i = 0; i < faces.size();) {
-    std::size_t j = i + 1;
-    while (j < faces.size() && faces[j].same_key(faces[i])) ++j;
-    if (j - i > 2) ++result.nonmanifold_faces;
-    i = j;
-  }
+  // A face is non-manifold where more than two tets share it: counted at its first record.
+  result.nonmanifold_faces += reduce_in_blocks(
+      faces.size(), std::size_t{0},
+      [&](std::size_t i) -> std::size_t {
+        return (i == 0 || !faces[i].same_key(faces[i - 1])) && i + 2 < faces.size() &&
+               faces[i + 2].same_key(faces[i]);
+      },
+      std::plus<>());
   // Per input triangle, in parallel; counted and listed in triangle order after.
   enum Verdict : std::uint8_t { kBoundaryFace, kMissing, kShared, kMisoriented };
   const std::size_t n_triangles = surface.triangles.size();

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <numeric>
 #include <random>
 #include <string>
@@ -256,6 +257,23 @@ TEST(ShellChecks, MissingSharedAndMisorientedTriangles) {
     EXPECT_EQ(r.overlapping_pairs, 1u);
     ASSERT_EQ(r.first_overlapping_pairs.size(), 1u);
     EXPECT_EQ(r.first_overlapping_pairs[0][1], m.tets.size() - 1);
+  }
+  {
+    // Tets repeated once and twice: each vertex triple held by three or more tets counts once,
+    // against a count of every tet's faces by triple.
+    TetMesh m = valid;
+    for (const std::size_t f : {1, 5, 5, 7, 7, 7}) m.tets.push_back(m.tets[holder(f)]);
+    std::map<std::array<std::uint32_t, 3>, int> holders;
+    for (const Tet& t : m.tets)
+      for (int k = 0; k < 4; ++k) {
+        std::array<std::uint32_t, 3> key = {t[(k + 1) % 4], t[(k + 2) % 4], t[(k + 3) % 4]};
+        std::sort(key.begin(), key.end());
+        ++holders[key];
+      }
+    const auto nonmanifold = static_cast<std::size_t>(
+        std::count_if(holders.begin(), holders.end(), [](const auto& h) { return h.second > 2; }));
+    ASSERT_GE(nonmanifold, 6u);
+    EXPECT_EQ(check_shell(s, m).nonmanifold_faces, nonmanifold);
   }
   {
     TetMesh m = valid;
