@@ -201,9 +201,13 @@ void ShellChecker::Impl::tet_geometries(const TetMesh& mesh,
 // with a 5% margin, and those tets in it.
 void ShellChecker::Impl::build_phase(const TetMesh& mesh, const std::vector<std::uint32_t>& first,
                                      const std::vector<std::uint32_t>& all) {
-  std::vector<TetGeometry> by_key(per_prism * all.size());  // absent keys: empty boxes
+  TetGeometries by_key(per_prism * all.size());  // `all` holds every prism: each key set here
   tet_geometries(mesh, first, all,
                  [&](std::uint32_t key, const TetGeometry& g) { by_key[key] = g; });
+  for_each_index(all.size(), [&](std::size_t f) {  // absent keys: empty boxes
+    for (std::uint32_t j = first[f + 1] - first[f]; j < per_prism; ++j)
+      by_key[per_prism * f + j] = TetGeometry{};
+  });
   BBox box = bounding_box(surface);
   const BBox tets = bounding_box_of(by_key);
   box.expand(tets.lo);

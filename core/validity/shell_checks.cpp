@@ -72,7 +72,8 @@ void check_intersections(const SurfaceMesh& surface, const TetMesh& mesh,
     G = 1;
     key_count = assign_keys(G);
   }
-  std::vector<TetGeometry> geo(key_count);  // absent keys: empty boxes
+  TetGeometries geo(key_count);  // absent keys: empty boxes, the others set below
+  for_each_index(key_count, [&](std::size_t k) { geo[k] = TetGeometry{}; });
   std::vector<std::uint32_t> tet_of_key(key_count, 0);
   for_each_chunk(
       n,

@@ -116,7 +116,7 @@ long TetGrid::cell_of(double x, int axis) const {
                     dims_[axis] - 1);
 }
 
-BBox bounding_box_of(const std::vector<TetGeometry>& geo) {
+BBox bounding_box_of(const TetGeometries& geo) {
   return reduce_in_blocks(
       geo.size(), BBox{}, [&](std::size_t t) -> const BBox& { return geo[t].box; },
       [](BBox all, const BBox& b) {
@@ -128,7 +128,7 @@ BBox bounding_box_of(const std::vector<TetGeometry>& geo) {
       });
 }
 
-double grid_cell_size(const std::vector<TetGeometry>& geo, const BBox& all) {
+double grid_cell_size(const TetGeometries& geo, const BBox& all) {
   // The tets' count, total volume and total mean side (boxes not empty).
   const std::array<double, 3> sums = reduce_in_blocks(
       geo.size(), std::array<double, 3>{0.0, 0.0, 0.0},
@@ -336,8 +336,7 @@ void z_order(const std::vector<BBox>& boxes, const BBox& box, std::vector<std::u
 }  // namespace
 
 BroadPhase::BroadPhase(const SurfaceMesh& surface, const BBox& box, double cell_size,
-                       std::vector<TetGeometry> geometry, bool enter_triangles,
-                       std::uint32_t group_size)
+                       TetGeometries geometry, bool enter_triangles, std::uint32_t group_size)
     : surface_(surface),
       grid_(box, cell_size),
       group_(std::max<std::uint32_t>(1, group_size)),
@@ -345,15 +344,18 @@ BroadPhase::BroadPhase(const SurfaceMesh& surface, const BBox& box, double cell_
       cell_slots_(grid_.num_cells()) {
   const std::size_t groups = (key_count_ + group_ - 1) / group_;
   std::vector<BBox> boxes(groups);
-  for (std::size_t k = 0; k < key_count_; ++k)
-    if (!geometry[k].box.empty()) {
-      boxes[k / group_].expand(geometry[k].box.lo);
-      boxes[k / group_].expand(geometry[k].box.hi);
-    }
+  for_each_index(groups, [&](std::size_t s) {
+    for (std::size_t k = s * group_; k < std::min(key_count_, (s + 1) * group_); ++k)
+      if (!geometry[k].box.empty()) {
+        boxes[s].expand(geometry[k].box.lo);
+        boxes[s].expand(geometry[k].box.hi);
+      }
+  });
   z_order(boxes, box, slot_, key_);
-  geo_.resize(groups * group_);  // the missing keys of the last group: empty, never present
-  for_each_index(key_count_,
-                 [&](std::size_t k) { geo_[index(static_cast<std::uint32_t>(k))] = geometry[k]; });
+  geo_.resize(groups * group_);  // each set below; the missing keys of the last group: empty
+  for_each_index(geo_.size(), [&](std::size_t k) {
+    geo_[index(static_cast<std::uint32_t>(k))] = k < key_count_ ? geometry[k] : TetGeometry{};
+  });
   box_.resize(geo_.size());
   present_.assign(geo_.size(), 0);
   slot_box_.resize(groups);

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "core/base/surface_mesh.h"
+#include "core/base/uninitialized_allocator.h"
 #include "core/base/vec3.h"
 #include "core/validity/tet_predicates.h"
 
@@ -68,9 +69,12 @@ class TetGrid {
   long dims_[3] = {1, 1, 1};
 };
 
+/// Tets' geometry by key or index, filled in parallel (no pass of its own to initialise it).
+using TetGeometries = std::vector<TetGeometry, UninitializedAllocator<TetGeometry>>;
+
 /// The box of all of `geo`'s boxes (those not empty: an empty box marks an absent tet, here and
 /// in grid_cell_size()).
-BBox bounding_box_of(const std::vector<TetGeometry>& geo);
+BBox bounding_box_of(const TetGeometries& geo);
 
 /// Cell size (world units) of a TetGrid over `all` for the tets `geo`: about the edge of a cube of
 /// 1.5^3 times the mean tet volume (at least an eighth of the tets' mean box side), so that
@@ -79,7 +83,7 @@ BBox bounding_box_of(const std::vector<TetGeometry>& geo);
 /// (counted on a sample of 4,096 tets): the cell lists hold at most about 64 entries per tet.
 /// Long needles converging on a point (a sphere's shell) keep small cells: each enters the cells
 /// along it, not those of its box.
-double grid_cell_size(const std::vector<TetGeometry>& geo, const BBox& all);
+double grid_cell_size(const TetGeometries& geo, const BBox& all);
 
 /// Lists of 32-bit values, one per slot, in one pool: built all at once (as a CSR array), then
 /// edited one list at a time. A list that grows moves to the end of the pool; the pool is
@@ -136,8 +140,8 @@ class BroadPhase {
   /// geometry geometry[k] until set_geometry() changes it (the slots stay those of this first
   /// geometry). With `enter_triangles`, every triangle of `surface` whose box meets `box` is
   /// entered in the cells of TetGrid::cells_of_triangle(). `surface` must outlive the object.
-  BroadPhase(const SurfaceMesh& surface, const BBox& box, double cell_size,
-             std::vector<TetGeometry> geometry, bool enter_triangles, std::uint32_t group_size = 1);
+  BroadPhase(const SurfaceMesh& surface, const BBox& box, double cell_size, TetGeometries geometry,
+             bool enter_triangles, std::uint32_t group_size = 1);
 
   /// Gives tet `key` the geometry `g`; calls for distinct keys may run concurrently.
   /// \pre !contains(key)
@@ -217,7 +221,7 @@ class BroadPhase {
   std::uint32_t group_ = 1;
   std::size_t key_count_ = 0;
   std::vector<std::uint32_t> slot_, key_;    // per group its slot, per slot its group
-  std::vector<TetGeometry> geo_;             // per index
+  TetGeometries geo_;                        // per index
   std::vector<BBox> box_;                    // per index: the tet's box while it is present
   std::vector<std::uint8_t> present_;        // per index
   std::vector<BBox> slot_box_;               // per slot

@@ -141,7 +141,7 @@ TEST(BroadPhase, MovedTetsMeetTheGroupsOfTetsEnteredAfresh) {
     return tet_geometry(p);
   };
   const std::uint32_t n = 600;
-  std::vector<TetGeometry> start(n);
+  TetGeometries start(n);
   for (TetGeometry& g : start) g = random_tet();
   std::vector<std::uint32_t> all(n);
   std::iota(all.begin(), all.end(), 0u);
@@ -155,7 +155,7 @@ TEST(BroadPhase, MovedTetsMeetTheGroupsOfTetsEnteredAfresh) {
     SCOPED_TRACE(std::to_string(moved) + " tets moved");
     BroadPhase edited(surface, box, 0.05, start, false);
     edited.insert(all);
-    std::vector<TetGeometry> now = start;
+    TetGeometries now = start;
     std::vector<std::uint32_t> keys;
     for (std::uint32_t k = 0; k < moved; ++k) keys.push_back(k * (n / moved));
     for (const std::uint32_t k : keys) now[k] = random_tet();
