@@ -15,6 +15,7 @@
 #include "core/assemble/quality.h"
 #include "core/base/errors.h"
 #include "core/base/index_lists.h"
+#include "core/base/parallel.h"
 #include "core/base/timer.h"
 #include "core/inner/sectors.h"
 
@@ -293,28 +294,62 @@ class ShellSearch {
     return unwelded;
   }
 
-  /// Works through the prisms in `queue` and those queued on the way: settle(p, again) for each,
-  /// `p` the prism in `s` as it is then, again(v) queuing the prisms around vertex v that are not
-  /// queued already.
+  /// Works through the prisms in `queue` and those queued on the way: settle(p, again) for each
+  /// that has a tet for_each_unsettled_tet() visits, `p` the prism in `s` as it is then, again(v)
+  /// queuing the prisms around vertex v that are not queued already (settle() must call it for
+  /// every vertex it changes).
+  ///
+  /// A long queue is judged first in parallel; a prism found settled there is passed over unless
+  /// a vertex of it changed since (a prism depends on its three vertices only), so the serial
+  /// walk, and its outcome, are those of judging every prism in turn.
   template <class Settle>
   void for_each_queued_prism(const State& s, std::vector<std::uint32_t> queue,
+                             double zero_volume_tolerance, double min_quality,
                              const Settle& settle) const {
+    const auto unsettled = [&](const LocalPrism& p) {
+      bool found = false;
+      for_each_unsettled_tet(p, zero_volume_tolerance, min_quality,
+                             [&](const Tet&) { return found = true; });
+      return found;
+    };
     std::vector<char> queued(surface_.triangles.size(), 0);
     for (std::uint32_t f : queue) queued[f] = 1;
+    std::vector<char> settled(surface_.triangles.size(), 0);
+    if (queue.size() >= 1024) {
+      // The positions first, each vertex its own cache entry: the prisms then only read them.
+      for_each_index(full_.size(), [&](std::size_t v) {
+        if (s.t[v] != 0 && !s.welded[v]) cached_position(static_cast<std::uint32_t>(v), s.t[v]);
+      });
+      std::vector<char> judged(queue.size());
+      for_each_chunk(
+          queue.size(),
+          [&](std::size_t begin, std::size_t end) {
+            LocalPrism p;
+            for (std::size_t i = begin; i != end; ++i) {
+              prism(s, queue[i], p);
+              judged[i] = !unsettled(p);
+            }
+          },
+          256);
+      for (std::size_t i = 0; i < queue.size(); ++i) settled[queue[i]] = judged[i];
+    }
     const auto again = [&](std::uint32_t v) {
-      for (const std::uint32_t f : faces_[v])
+      for (const std::uint32_t f : faces_[v]) {
+        settled[f] = 0;
         if (!queued[f]) {
           queued[f] = 1;
           queue.push_back(f);
         }
+      }
     };
     LocalPrism p;
     for (std::size_t head = 0; head < queue.size(); ++head) {
       if ((head & 1023) == 1023) monitor_.alive();
       const std::uint32_t f = queue[head];
       queued[f] = 0;
+      if (settled[f]) continue;
       prism(s, f, p);
-      settle(p, again);
+      if (unsettled(p)) settle(p, again);
     }
   }
 
@@ -346,20 +381,18 @@ class ShellSearch {
   /// Sends the raised vertices of the prisms in `queue`, and of those around every vertex sent
   /// back on the way, back to `before` (their depth before the raise) while a tet of the prism
   /// is one settle_volumes() does not accept. A vertex is raised while s.t[v] != before[v].
-  /// Ends with every prism either accepted or as it was before the raise. Local and serial.
+  /// Ends with every prism either accepted or as it was before the raise. Local; serial but for
+  /// for_each_queued_prism()'s first judgement.
   void lower_raised(State& s, const std::vector<double>& before, std::vector<std::uint32_t> queue,
                     double zero_volume_tolerance, double min_quality) const {
-    for_each_queued_prism(s, std::move(queue), [&](const LocalPrism& p, const auto& again) {
-      bool unsettled = false;
-      for_each_unsettled_tet(p, zero_volume_tolerance, min_quality,
-                             [&](const Tet&) { return unsettled = true; });
-      if (!unsettled) return;
-      for (const std::uint32_t v : surface_.triangles[p.face]) {
-        if (s.t[v] == before[v]) continue;
-        s.t[v] = before[v];
-        again(v);
-      }
-    });
+    for_each_queued_prism(s, std::move(queue), zero_volume_tolerance, min_quality,
+                          [&](const LocalPrism& p, const auto& again) {
+                            for (const std::uint32_t v : surface_.triangles[p.face]) {
+                              if (s.t[v] == before[v]) continue;
+                              s.t[v] = before[v];
+                              again(v);
+                            }
+                          });
   }
 
   /// Steps back, as a round does for an inverted or flat tet (its deepest movable inner corner),
@@ -369,23 +402,28 @@ class ShellSearch {
   /// layers, the whole prism's 3 tets (split_prism() of its outer and inner triangles) must
   /// reach `min_quality` and each layer's tets min_quality / K: a layer is 1 / K as thick, so
   /// its tets are about K times flatter than the prism's, which stepping back does not cure.
-  /// Local and serial. Marks the moved vertices in `lowered`; returns how many left their weld.
+  /// Local; serial but for for_each_queued_prism()'s first judgement. Marks the moved vertices
+  /// in `lowered`; returns how many left their weld.
   std::size_t settle_volumes(State& s, std::vector<std::uint32_t> queue, double shrink,
                              double zero_volume_tolerance, double min_quality,
                              std::vector<char>& lowered) const {
     std::size_t unwelded = 0;
-    for_each_queued_prism(s, std::move(queue), [&](const LocalPrism& p, const auto& again) {
-      // The first offending tet with a movable corner steps back; the prism is queued again.
-      for_each_unsettled_tet(p, zero_volume_tolerance, min_quality, [&](const Tet& t) {
-        const std::uint32_t v = deepest_corner(s, p, t);
-        if (v == UINT32_MAX) return false;  // at the floor: left to the checks
-        unwelded += step_back(s, v, shrink, [&](std::uint32_t u) {
-          lowered[u] = 1;
-          again(u);
-        });
-        return true;
-      });
-    });
+    for_each_queued_prism(s, std::move(queue), zero_volume_tolerance, min_quality,
+                          [&](const LocalPrism& p, const auto& again) {
+                            // The first offending tet with a movable corner steps back; the prism
+                            // is queued again.
+                            for_each_unsettled_tet(
+                                p, zero_volume_tolerance, min_quality, [&](const Tet& t) {
+                                  const std::uint32_t v = deepest_corner(s, p, t);
+                                  if (v == UINT32_MAX)
+                                    return false;  // at the floor: left to the checks
+                                  unwelded += step_back(s, v, shrink, [&](std::uint32_t u) {
+                                    lowered[u] = 1;
+                                    again(u);
+                                  });
+                                  return true;
+                                });
+                          });
     return unwelded;
   }
 
