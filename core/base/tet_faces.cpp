@@ -9,7 +9,7 @@
 
 namespace vdb_shell {
 
-std::vector<FaceRecord> sorted_tet_faces(const TetMesh& mesh) {
+FaceRecords sorted_tet_faces(const TetMesh& mesh) {
   const std::size_t n_tets = mesh.tets.size();
   // Blocks of tets and ranges of points (by smallest vertex), at most 1024 and 4096 of them: the
   // counts per block and range stay small.
@@ -46,7 +46,7 @@ std::vector<FaceRecord> sorted_tet_faces(const TetMesh& mesh) {
     range_start[r + 1] = at;
   }
   // 2. Each block writes its faces to its slots.
-  std::vector<FaceRecord> faces(4 * n_tets);
+  FaceRecords faces(4 * n_tets);  // every element written below
   for_each_block([&](std::size_t b, std::size_t t) {
     for (int k = 0; k < 4; ++k) {
       const std::array<std::uint32_t, 3> key = face_key(t, k);
@@ -66,7 +66,7 @@ std::vector<FaceRecord> sorted_tet_faces(const TetMesh& mesh) {
         std::vector<std::size_t> start(span + 1, 0);
         for (std::size_t i = begin; i != end; ++i) ++start[faces[i].key[0] - first + 1];
         for (std::size_t p = 0; p < span; ++p) start[p + 1] += start[p];
-        std::vector<FaceRecord> sorted(end - begin);
+        FaceRecords sorted(end - begin);
         std::vector<std::size_t> fill(start.begin(), start.end() - 1);
         for (std::size_t i = begin; i != end; ++i)
           sorted[fill[faces[i].key[0] - first]++] = faces[i];

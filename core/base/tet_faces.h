@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/base/tet_mesh.h"
+#include "core/base/uninitialized_allocator.h"
 
 namespace vdb_shell {
 
@@ -27,6 +28,9 @@ struct FaceRecord {
   }
 };
 
+/// Faces in a buffer a parallel loop fills (no pass of its own to initialise it).
+using FaceRecords = std::vector<FaceRecord, UninitializedAllocator<FaceRecord>>;
+
 /// a, b and c in ascending order.
 inline std::array<std::uint32_t, 3> sorted3(std::uint32_t a, std::uint32_t b, std::uint32_t c) {
   std::array<std::uint32_t, 3> k = {a, b, c};
@@ -37,6 +41,6 @@ inline std::array<std::uint32_t, 3> sorted3(std::uint32_t a, std::uint32_t b, st
 /// The 4T faces of the tets in FaceRecord order (equal faces next to each other). Every step runs
 /// in parallel over fixed blocks; since FaceRecord's order is total, the result is the same for
 /// any thread count.
-std::vector<FaceRecord> sorted_tet_faces(const TetMesh& mesh);
+FaceRecords sorted_tet_faces(const TetMesh& mesh);
 
 }  // namespace vdb_shell

@@ -17,7 +17,7 @@ ShellFaces shell_faces(const TetMesh& mesh, const SurfaceMesh& surface) {
   ShellFaces f;
   f.neighbour.assign(4 * mesh.tets.size(), -1);
   f.outer.assign(4 * mesh.tets.size(), 0);
-  const std::vector<FaceRecord> records = sorted_tet_faces(mesh);
+  const FaceRecords records = sorted_tet_faces(mesh);
   std::vector<std::array<std::uint32_t, 3>> triangles;
   triangles.reserve(surface.triangles.size());
   for (const Triangle& t : surface.triangles) triangles.push_back(sorted3(t[0], t[1], t[2]));

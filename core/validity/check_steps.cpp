@@ -98,7 +98,7 @@ void count_volumes(const TetMesh& mesh, const ShellCheckOptions& options,
 
 void check_boundary_faces(const SurfaceMesh& surface, const TetMesh& mesh,
                           const ShellCheckOptions& options, ShellCheckResult& result) {
-  const std::vector<FaceRecord> faces = sorted_tet_faces(mesh);
+  const FaceRecords faces = sorted_tet_faces(mesh);
   // A face is non-manifold where more than two tets share it: counted at its first record.
   result.nonmanifold_faces += reduce_in_blocks(
       faces.size(), std::size_t{0},

@@ -416,7 +416,7 @@ TetFormat tet_format_from_path(const std::string& path, int msh_version) {
 
 TaggedBoundary tagged_boundary(const TetMesh& mesh) {
   // A face no other tet shares is a boundary face; listed in (tet, local face) order.
-  const std::vector<FaceRecord> sorted = sorted_tet_faces(mesh);
+  const FaceRecords sorted = sorted_tet_faces(mesh);
   std::vector<std::uint8_t> boundary(sorted.size(), 0);
   for (std::size_t i = 0; i < sorted.size();) {
     std::size_t j = i + 1;

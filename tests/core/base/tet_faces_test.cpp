@@ -35,7 +35,7 @@ TEST(TetFaces, EveryFaceOnceInRecordOrderForAnyThreadCount) {
       expected.push_back({sorted3(v[f[0]], v[f[1]], v[f[2]]), t, static_cast<std::uint8_t>(k)});
     }
   std::sort(expected.begin(), expected.end());
-  const auto same = [](const std::vector<FaceRecord>& a, const std::vector<FaceRecord>& b) {
+  const auto same = [](const FaceRecords& a, const std::vector<FaceRecord>& b) {
     return a.size() == b.size() &&
            std::equal(a.begin(), a.end(), b.begin(), [](const FaceRecord& x, const FaceRecord& y) {
              return x.key == y.key && x.tet == y.tet && x.face == y.face;
@@ -44,7 +44,7 @@ TEST(TetFaces, EveryFaceOnceInRecordOrderForAnyThreadCount) {
   for (const int threads : {1, 4}) {
     SCOPED_TRACE(threads);
     tbb::task_arena arena(threads);
-    std::vector<FaceRecord> faces;
+    FaceRecords faces;
     arena.execute([&] { faces = sorted_tet_faces(mesh); });
     EXPECT_TRUE(same(faces, expected));
   }

@@ -33,7 +33,7 @@ Cube kuhn_cube() {
     c.mesh.tets.push_back(t);
     c.mesh.quality.push_back(0.93);
   }
-  const std::vector<FaceRecord> faces = sorted_tet_faces(c.mesh);
+  const FaceRecords faces = sorted_tet_faces(c.mesh);
   for (std::size_t i = 0; i < faces.size(); ++i) {
     const bool alone = (i == 0 || !faces[i].same_key(faces[i - 1])) &&
                        (i + 1 == faces.size() || !faces[i].same_key(faces[i + 1]));
