@@ -275,26 +275,14 @@ std::vector<std::uint32_t> collect_cells(std::size_t n, const Bound& bound, cons
       2);
   for (std::size_t i = 0; i < n; ++i) start[i + 1] += start[i];
   std::vector<std::uint32_t> cells(start[n]);
-  for (std::size_t b = 0; b < found.size(); ++b)
-    std::copy(found[b].begin(), found[b].end(),
-              cells.begin() + static_cast<std::ptrdiff_t>(start[b * kBlock]));
+  for_each_index(
+      found.size(),
+      [&](std::size_t b) {
+        std::copy(found[b].begin(), found[b].end(),
+                  cells.begin() + static_cast<std::ptrdiff_t>(start[b * kBlock]));
+      },
+      2);
   return cells;
-}
-
-// The inverse of lists of cells: per cell c, items[cell_start[c], cell_start[c + 1]) are the
-// items i in [0, n) whose list cells_of(i) (a [begin, end) pair of pointers) holds c, ascending.
-template <class Index, class CellsOf>
-void invert_cells(std::size_t n, const CellsOf& cells_of, std::size_t num_cells,
-                  std::vector<Index>& cell_start, std::vector<std::uint32_t>& items) {
-  cell_start.assign(num_cells + 1, 0);
-  for (std::size_t i = 0; i < n; ++i)
-    for (auto [c, end] = cells_of(i); c != end; ++c) ++cell_start[*c + 1];
-  for (std::size_t c = 0; c < num_cells; ++c) cell_start[c + 1] += cell_start[c];
-  items.resize(cell_start[num_cells]);
-  std::vector<Index> fill(cell_start.begin(), cell_start.end() - 1);
-  for (std::size_t i = 0; i < n; ++i)
-    for (auto [c, end] = cells_of(i); c != end; ++c)
-      items[fill[*c]++] = static_cast<std::uint32_t>(i);
 }
 
 // Slots of groups by a Z-order curve through the centres of their boxes (`boxes`, one per group)
