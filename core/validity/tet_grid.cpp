@@ -5,6 +5,7 @@
 #include <cmath>
 #include <utility>
 
+#include "core/base/index_lists.h"
 #include "core/base/parallel.h"
 
 namespace vdb_shell {
@@ -369,7 +370,7 @@ void BroadPhase::enter_triangles() {
         return meets_grid(f) ? grid_.cells_of_triangle(triangle_corners(surface_, f), out) : 0;
       },
       start);
-  invert_cells(
+  invert_lists(
       n_faces,
       [&](std::size_t f) {
         return std::pair{cells.data() + start[f], cells.data() + start[f + 1]};
@@ -414,7 +415,7 @@ void BroadPhase::remove(const std::vector<std::uint32_t>& keys) {
 void BroadPhase::rebuild_cell_slots() {
   std::vector<std::uint64_t> start;
   std::vector<std::uint32_t> items;
-  invert_cells(
+  invert_lists(
       state_.size(),
       [&](std::size_t s) {
         return std::pair{slot_cells_.begin(s), slot_cells_.end(s)};

@@ -15,10 +15,8 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
-#include <utility>
 #include <vector>
 
-#include "core/base/parallel.h"
 #include "core/base/surface_mesh.h"
 #include "core/base/uninitialized_allocator.h"
 #include "core/base/vec3.h"
@@ -70,61 +68,6 @@ class TetGrid {
   double cell_ = 1.0, inv_cell_ = 1.0;  // world units, 1 / world units
   long dims_[3] = {1, 1, 1};
 };
-
-/// The inverse of lists of cells: per cell c, items[cell_start[c], cell_start[c + 1]) are the
-/// items i in [0, n) whose list cells_of(i) (a [begin, end) pair of pointers to cell indices
-/// below num_cells) holds c, ascending. In parallel over blocks of items and ranges of cells;
-/// the same lists for any thread count.
-template <class Index, class CellsOf>
-void invert_cells(std::size_t n, const CellsOf& cells_of, std::size_t num_cells,
-                  std::vector<Index>& cell_start, std::vector<std::uint32_t>& items) {
-  // At most 256 blocks and 1024 ranges: the counts per block and range stay small.
-  const std::size_t block = std::max<std::size_t>(4096, (n + 255) / 256);
-  const std::size_t span = std::max<std::size_t>(1024, (num_cells + 1023) / 1024);
-  const std::size_t n_blocks = (n + block - 1) / block;
-  const std::size_t n_ranges = std::max<std::size_t>(1, (num_cells + span - 1) / span);
-  const auto for_each_block = [&](const auto& body) {
-    for_each_index(
-        n_blocks,
-        [&](std::size_t b) {
-          for (std::size_t i = b * block; i < std::min(n, (b + 1) * block); ++i)
-            for (auto [c, end] = cells_of(i); c != end; ++c) body(b, i, *c);
-        },
-        2);
-  };
-  // Each block counts its entries per range of cells; the counts become its first place in
-  // each range (ranges in order, within a range the blocks in order: items ascending).
-  std::vector<std::size_t> place(n_blocks * n_ranges, 0);
-  for_each_block(
-      [&](std::size_t b, std::size_t, std::uint32_t c) { ++place[b * n_ranges + c / span]; });
-  std::vector<std::size_t> range_start(n_ranges + 1, 0);
-  for (std::size_t r = 0, at = 0; r < n_ranges; ++r) {
-    for (std::size_t b = 0; b < n_blocks; ++b) at += std::exchange(place[b * n_ranges + r], at);
-    range_start[r + 1] = at;
-  }
-  // The entries (cell, item) by range, then each range's by cell, keeping the items' order.
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> by_range(range_start[n_ranges]);
-  for_each_block([&](std::size_t b, std::size_t i, std::uint32_t c) {
-    by_range[place[b * n_ranges + c / span]++] = {c, static_cast<std::uint32_t>(i)};
-  });
-  cell_start.assign(num_cells + 1, 0);
-  items.resize(by_range.size());
-  for_each_index(
-      n_ranges,
-      [&](std::size_t r) {
-        const std::size_t first = r * span, cells = std::min(num_cells, first + span) - first;
-        std::vector<Index> fill(cells + 1, 0);  // the range's cells' starts, then fill places
-        fill[0] = range_start[r];
-        for (std::size_t e = range_start[r]; e < range_start[r + 1]; ++e)
-          ++fill[by_range[e].first - first + 1];
-        for (std::size_t c = 0; c < cells; ++c) fill[c + 1] += fill[c];
-        std::copy(fill.begin(), fill.end() - 1, cell_start.begin() + first);
-        for (std::size_t e = range_start[r]; e < range_start[r + 1]; ++e)
-          items[fill[by_range[e].first - first]++] = by_range[e].second;
-      },
-      2);
-  cell_start[num_cells] = range_start[n_ranges];
-}
 
 /// Tets' geometry by key or index, filled in parallel (no pass of its own to initialise it).
 using TetGeometries = std::vector<TetGeometry, UninitializedAllocator<TetGeometry>>;

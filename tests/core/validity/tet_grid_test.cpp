@@ -1,12 +1,10 @@
 // tet_grid_test.cpp — the broad phase (tet_grid.h): the cells TetGrid gives a tet hold every
 // point of it and are those of a test of every cell of its box; PooledLists, the cell lists:
 // edits of many values at once keep every list ascending and leave the other lists alone;
-// BroadPhase: tets moved, few or many, meet the groups that tets entered afresh meet;
-// invert_cells() gives every cell its items, ascending, for any thread count.
+// BroadPhase: tets moved, few or many, meet the groups that tets entered afresh meet.
 #include "core/validity/tet_grid.h"
 
 #include <gtest/gtest.h>
-#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cmath>
@@ -91,45 +89,6 @@ TEST(TetGrid, CellsOfATetFarFromTheOriginHoldIt) {
 
 std::vector<std::uint32_t> list_of(const PooledLists& lists, std::size_t s) {
   return {lists.begin(s), lists.end(s)};
-}
-
-TEST(InvertCells, EveryCellListsItsItemsAscendingForAnyThreadCount) {
-  // 30,000 items (8 blocks) with 0-6 cells each, in any order, over 5,000 cells (5 ranges):
-  // against a serial count of every (cell, item) pair.
-  const std::size_t n = 30000, num_cells = 5000;
-  std::mt19937 rng(3);
-  std::vector<std::vector<std::uint32_t>> lists(n);
-  for (auto& l : lists) {
-    std::uniform_int_distribution<std::uint32_t> cell(0, num_cells - 1);
-    for (std::size_t k = rng() % 7; k > 0; --k) l.push_back(cell(rng));
-    std::sort(l.begin(), l.end());
-    l.erase(std::unique(l.begin(), l.end()), l.end());
-    std::shuffle(l.begin(), l.end(), rng);
-  }
-  std::vector<std::vector<std::uint32_t>> expected(num_cells);
-  for (std::uint32_t i = 0; i < n; ++i)
-    for (const std::uint32_t c : lists[i]) expected[c].push_back(i);
-  for (const int threads : {1, 4}) {
-    SCOPED_TRACE(threads);
-    std::vector<std::uint64_t> start;
-    std::vector<std::uint32_t> items;
-    tbb::task_arena(threads).execute([&] {
-      invert_cells(
-          n,
-          [&](std::size_t i) {
-            return std::pair{lists[i].data(), lists[i].data() + lists[i].size()};
-          },
-          num_cells, start, items);
-    });
-    ASSERT_EQ(start.size(), num_cells + 1);
-    ASSERT_EQ(start.back(), items.size());
-    for (std::size_t c = 0; c < num_cells; ++c)
-      ASSERT_EQ(
-          std::vector<std::uint32_t>(items.begin() + static_cast<std::ptrdiff_t>(start[c]),
-                                     items.begin() + static_cast<std::ptrdiff_t>(start[c + 1])),
-          expected[c])
-          << "cell " << c;
-  }
 }
 
 TEST(PooledLists, MergeSortedKeepsTheListAscending) {
