@@ -163,7 +163,7 @@ CutPrisms cut_prisms(const SurfaceMesh& surface, const ShellInput& input, int la
       const std::uint32_t a = out.prisms[p].ids[i], b = out.prisms[p].ids[(i + 1) % 3];
       sides.emplace_back(std::uint64_t(std::min(a, b)) << 32 | std::max(a, b), p, i);
     }
-  std::sort(sides.begin(), sides.end());
+  parallel_sort(sides.begin(), sides.end());  // distinct tuples: one order for any thread count
   for (std::size_t s = 0; s + 1 < sides.size(); ++s) {
     const auto& [key, p, i] = sides[s];
     const auto& [key2, q, j] = sides[s + 1];
@@ -210,20 +210,19 @@ OptimizeReport optimize_shell(const SurfaceMesh& surface, const std::vector<doub
   // built again after sweeps that cut quads the other way.
   IndexLists around, ring;
   const auto index_rings = [&] {
-    around.build(mesh.points.size(), [&](auto emit) {
-      for (std::uint32_t t = 0; t < mesh.tets.size(); ++t)
-        for (const std::uint32_t v : mesh.tets[t]) emit(v, t);
-    });
-    std::vector<std::uint32_t> tets;
-    ring.build(n_inner, [&](auto emit) {
-      for (std::uint32_t i = 0; i < n_inner; ++i) {
-        tets.assign(around[n + i].begin(), around[n + i].end());
-        for (const std::uint32_t d : layer.of[i])
-          tets.insert(tets.end(), around[layer.point[d]].begin(), around[layer.point[d]].end());
-        std::sort(tets.begin(), tets.end());
-        tets.erase(std::unique(tets.begin(), tets.end()), tets.end());
-        for (const std::uint32_t t : tets) emit(i, t);
-      }
+    invert_lists(
+        mesh.tets.size(),
+        [&](std::size_t t) {
+          return std::pair{mesh.tets[t].data(), mesh.tets[t].data() + 4};
+        },
+        mesh.points.size(), around.start, around.items);
+    ring.build_each(n_inner, [&](std::size_t i, std::vector<std::uint32_t>& tets) {
+      const std::size_t at = tets.size();
+      tets.insert(tets.end(), around[n + i].begin(), around[n + i].end());
+      for (const std::uint32_t d : layer.of[i])
+        tets.insert(tets.end(), around[layer.point[d]].begin(), around[layer.point[d]].end());
+      std::sort(tets.begin() + std::ptrdiff_t(at), tets.end());
+      tets.erase(std::unique(tets.begin() + std::ptrdiff_t(at), tets.end()), tets.end());
     });
   };
   // Inner point i at `at`, its layer points with it.
@@ -293,12 +292,13 @@ OptimizeReport optimize_shell(const SurfaceMesh& surface, const std::vector<doub
     // Moves: the worst vertices first; a vertex moves only if no vertex moved in this sweep
     // shares a tet with it, so every tet has at most one corner moved per sweep: each move was
     // judged on the tets as they end up, and any subset of the moves can be undone exactly.
-    order.clear();
-    for (std::uint32_t i = 0; i < n_inner; ++i) {
+    for_each_index(n_inner, [&](std::size_t i) {
       ring_quality[i] = std::numeric_limits<double>::infinity();
       for (const std::uint32_t t : ring[i]) ring_quality[i] = std::min(ring_quality[i], quality[t]);
+    });
+    order.clear();
+    for (std::uint32_t i = 0; i < n_inner; ++i)
       if (!frozen[i] && owners[i].size() > 0 && ring_quality[i] <= threshold) order.push_back(i);
-    }
     std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
       return ring_quality[a] < ring_quality[b];
     });
@@ -386,14 +386,15 @@ OptimizeReport optimize_shell(const SurfaceMesh& surface, const std::vector<doub
 
     // Cuts: the worst quads first, of prisms none of whose corners moved in this sweep and no
     // two of one prism, so each cut too was judged on the tets as they end up.
-    order.clear();
-    for (std::uint32_t q = 0; q < cp.quads.size(); ++q) {
+    for_each_index(cp.quads.size(), [&](std::size_t q) {
       quad_quality[q] = std::numeric_limits<double>::infinity();
       for (const std::uint32_t p : cp.quads[q].prism)
         for (int k = 0; k < 3; ++k)
           quad_quality[q] = std::min(quad_quality[q], quality[cp.prisms[p].first_tet + k]);
+    });
+    order.clear();
+    for (std::uint32_t q = 0; q < cp.quads.size(); ++q)
       if (!frozen_quad[q] && quad_quality[q] <= threshold) order.push_back(q);
-    }
     std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
       return quad_quality[a] < quad_quality[b];
     });
