@@ -381,7 +381,15 @@ void BroadPhase::enter_triangles() {
 void BroadPhase::set_geometry(std::uint32_t key, const TetGeometry& g) { geo_[index(key)] = g; }
 
 std::vector<std::uint32_t> BroadPhase::slots_of(const std::vector<std::uint32_t>& keys) const {
-  std::vector<std::uint32_t> slots(keys.size());
+  std::vector<std::uint32_t> slots;
+  if (keys.size() * 16 >= key_.size()) {  // many: marked, then read in slot order
+    std::vector<std::uint8_t> marked(key_.size(), 0);
+    for (const std::uint32_t key : keys) marked[slot_[key / group_]] = 1;
+    for (std::uint32_t s = 0; s < marked.size(); ++s)
+      if (marked[s]) slots.push_back(s);
+    return slots;
+  }
+  slots.resize(keys.size());
   for (std::size_t i = 0; i < keys.size(); ++i) slots[i] = slot_[keys[i] / group_];
   std::sort(slots.begin(), slots.end());
   slots.erase(std::unique(slots.begin(), slots.end()), slots.end());
