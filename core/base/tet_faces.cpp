@@ -13,8 +13,8 @@ FaceRecords sorted_tet_faces(const TetMesh& mesh) {
   const std::size_t n_tets = mesh.tets.size();
   // Blocks of tets and ranges of points (by smallest vertex), at most 1024 and 4096 of them: the
   // counts per block and range stay small.
-  const std::size_t block = std::max<std::size_t>(16384, (n_tets + 1023) / 1024);
-  const std::size_t span = std::max<std::size_t>(1024, (mesh.points.size() + 4095) / 4096);
+  const std::size_t block = std::max<std::size_t>(4096, (n_tets + 1023) / 1024);
+  const std::size_t span = std::max<std::size_t>(256, (mesh.points.size() + 4095) / 4096);
   const std::size_t n_blocks = (n_tets + block - 1) / block;
   const std::size_t n_ranges = std::max<std::size_t>(1, (mesh.points.size() + span - 1) / span);
   const auto face_key = [&](std::size_t t, int k) {

@@ -13,8 +13,8 @@ namespace vdb_shell {
 namespace {
 
 TEST(TetFaces, EveryFaceOnceInRecordOrderForAnyThreadCount) {
-  // 40,000 random tets over 3,000 points: buckets of every size, shared and repeated faces, three
-  // blocks of tets and three ranges of points (sorted_tet_faces() splits at 16,384 and 1,024).
+  // 40,000 random tets over 3,000 points: buckets of every size, shared and repeated faces, ten
+  // blocks of tets and twelve ranges of points (sorted_tet_faces() splits at 4,096 and 256).
   TetMesh mesh;
   mesh.points.resize(3000);
   std::mt19937 rng(11);
