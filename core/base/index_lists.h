@@ -68,6 +68,36 @@ void invert_lists(std::size_t n, const KeysOf& keys_of, std::size_t num_keys,
   key_start[num_keys] = range_start[n_ranges];
 }
 
+/// Lists computed per key: key k's items are items[start[k], start[k + 1]), those list(k, out)
+/// appends to `out` (which it leaves alone otherwise). In parallel over blocks of `block` keys,
+/// each into a buffer of its own, joined in key order: the same lists for any thread count.
+template <class Index, class List>
+void lists_in_blocks(std::size_t keys, std::size_t block, const List& list,
+                     std::vector<Index>& start, std::vector<std::uint32_t>& items) {
+  std::vector<std::vector<std::uint32_t>> found((keys + block - 1) / block);
+  start.assign(keys + 1, 0);
+  for_each_index(
+      found.size(),
+      [&](std::size_t b) {
+        std::vector<std::uint32_t>& out = found[b];
+        for (std::size_t k = b * block; k < std::min(keys, (b + 1) * block); ++k) {
+          const std::size_t at = out.size();
+          list(k, out);
+          start[k + 1] = static_cast<Index>(out.size() - at);
+        }
+      },
+      2);
+  for (std::size_t k = 0; k < keys; ++k) start[k + 1] += start[k];
+  items.resize(start[keys]);
+  for_each_index(
+      found.size(),
+      [&](std::size_t b) {
+        std::copy(found[b].begin(), found[b].end(),
+                  items.begin() + static_cast<std::ptrdiff_t>(start[b * block]));
+      },
+      2);
+}
+
 struct IndexLists {
   std::vector<std::uint32_t> start, items;
 
@@ -94,33 +124,11 @@ struct IndexLists {
     pairs([&](std::uint32_t k, std::uint32_t item) { items[fill[k]++] = item; });
   }
 
-  /// Builds the lists of `keys` keys, key k's items those list(k, out) appends to `out` (which
-  /// it leaves alone otherwise): in parallel over blocks of keys, each into a buffer of its own,
-  /// joined in key order.
+  /// Builds the lists of `keys` keys, key k's items those list(k, out) appends to `out`, with
+  /// lists_in_blocks().
   template <class List>
   void build_each(std::size_t keys, const List& list) {
-    constexpr std::size_t kBlock = 1024;
-    std::vector<std::vector<std::uint32_t>> found((keys + kBlock - 1) / kBlock);
-    start.assign(keys + 1, 0);
-    for_each_index(
-        found.size(),
-        [&](std::size_t b) {
-          std::vector<std::uint32_t>& out = found[b];
-          for (std::size_t k = b * kBlock; k < std::min(keys, (b + 1) * kBlock); ++k) {
-            const std::size_t at = out.size();
-            list(k, out);
-            start[k + 1] = static_cast<std::uint32_t>(out.size() - at);
-          }
-        },
-        2);
-    for (std::size_t k = 0; k < keys; ++k) start[k + 1] += start[k];
-    items.resize(start[keys]);
-    for_each_index(
-        found.size(),
-        [&](std::size_t b) {
-          std::copy(found[b].begin(), found[b].end(), items.begin() + start[b * kBlock]);
-        },
-        2);
+    lists_in_blocks(keys, 1024, list, start, items);
   }
 };
 

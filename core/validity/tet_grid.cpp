@@ -259,30 +259,15 @@ namespace {
 template <class Bound, class CellsOf>
 std::vector<std::uint32_t> collect_cells(std::size_t n, const Bound& bound, const CellsOf& cells_of,
                                          std::vector<std::uint64_t>& start) {
-  constexpr std::size_t kBlock = 128;
-  std::vector<std::vector<std::uint32_t>> found((n + kBlock - 1) / kBlock);
-  start.assign(n + 1, 0);
-  for_each_index(
-      found.size(),
-      [&](std::size_t b) {
-        std::vector<std::uint32_t>& out = found[b];
-        for (std::size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) {
-          const std::size_t at = out.size();
-          out.resize(at + bound(i));
-          out.resize(at + cells_of(i, out.data() + at));
-          start[i + 1] = out.size() - at;
-        }
+  std::vector<std::uint32_t> cells;
+  lists_in_blocks(
+      n, 128,
+      [&](std::size_t i, std::vector<std::uint32_t>& out) {
+        const std::size_t at = out.size();
+        out.resize(at + bound(i));
+        out.resize(at + cells_of(i, out.data() + at));
       },
-      2);
-  for (std::size_t i = 0; i < n; ++i) start[i + 1] += start[i];
-  std::vector<std::uint32_t> cells(start[n]);
-  for_each_index(
-      found.size(),
-      [&](std::size_t b) {
-        std::copy(found[b].begin(), found[b].end(),
-                  cells.begin() + static_cast<std::ptrdiff_t>(start[b * kBlock]));
-      },
-      2);
+      start, cells);
   return cells;
 }
 
