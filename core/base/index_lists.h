@@ -1,6 +1,8 @@
 // index_lists.h — lists of indices per key in one array (compressed rows): key k's items are
-// items[start[k] .. start[k + 1]). Built in two passes (count, then fill) from any enumeration of
-// (key, item) pairs, keeping the order in which each key's items are enumerated.
+// items[start[k] .. start[k + 1]). IndexLists is built in two passes (count, then fill) from any
+// enumeration of (key, item) pairs, keeping the order in which each key's items are enumerated,
+// or per key in parallel blocks (lists_in_blocks()); invert_lists() turns lists of keys per item
+// into lists of items per key, in parallel.
 #pragma once
 
 #include <algorithm>

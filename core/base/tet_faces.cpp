@@ -41,7 +41,6 @@ FaceRecords sorted_tet_faces(const TetMesh& mesh) {
   });
   std::vector<std::size_t> range_start(n_ranges + 1, 0);
   for (std::size_t r = 0, at = 0; r < n_ranges; ++r) {
-    range_start[r] = at;
     for (std::size_t b = 0; b < n_blocks; ++b) at += std::exchange(slot[b * n_ranges + r], at);
     range_start[r + 1] = at;
   }
