@@ -294,62 +294,58 @@ class ShellSearch {
     return unwelded;
   }
 
-  /// Works through the prisms in `queue` and those queued on the way: settle(p, again) for each
-  /// that has a tet for_each_unsettled_tet() visits, `p` the prism in `s` as it is then, again(v)
-  /// queuing the prisms around vertex v that are not queued already (settle() must call it for
-  /// every vertex it changes).
+  /// Works through the prisms in `queue` and those queued on the way: settle(p, again) for each,
+  /// `p` the prism in `s` as it is then, again(v) queuing the prisms around vertex v that are not
+  /// queued already (settle() must call it for every vertex it changes, and do nothing to a
+  /// prism none of whose tets for_each_unsettled_tet() visits).
   ///
   /// A long queue is judged first in parallel; a prism found settled there is passed over unless
   /// a vertex of it changed since (a prism depends on its three vertices only), so the serial
-  /// walk, and its outcome, are those of judging every prism in turn.
+  /// walk, and its outcome, are those of settling every prism in turn.
   template <class Settle>
   void for_each_queued_prism(const State& s, std::vector<std::uint32_t> queue,
                              double zero_volume_tolerance, double min_quality,
                              const Settle& settle) const {
-    const auto unsettled = [&](const LocalPrism& p) {
-      bool found = false;
-      for_each_unsettled_tet(p, zero_volume_tolerance, min_quality,
-                             [&](const Tet&) { return found = true; });
-      return found;
-    };
-    std::vector<char> queued(surface_.triangles.size(), 0);
-    for (std::uint32_t f : queue) queued[f] = 1;
-    std::vector<char> settled(surface_.triangles.size(), 0);
+    enum : char { kQueued = 1, kSettled = 2 };  // per prism, either or both
+    std::vector<char> mark(surface_.triangles.size(), 0);
+    for (std::uint32_t f : queue) mark[f] = kQueued;
     if (queue.size() >= 1024) {
       // The positions first, each vertex its own cache entry: the prisms then only read them.
       for_each_index(full_.size(), [&](std::size_t v) {
         if (s.t[v] != 0 && !s.welded[v]) cached_position(static_cast<std::uint32_t>(v), s.t[v]);
       });
-      std::vector<char> judged(queue.size());
+      std::vector<char> settled(queue.size(), 1);
       for_each_chunk(
           queue.size(),
           [&](std::size_t begin, std::size_t end) {
             LocalPrism p;
             for (std::size_t i = begin; i != end; ++i) {
               prism(s, queue[i], p);
-              judged[i] = !unsettled(p);
+              for_each_unsettled_tet(p, zero_volume_tolerance, min_quality, [&](const Tet&) {
+                settled[i] = 0;
+                return true;
+              });
             }
           },
           256);
-      for (std::size_t i = 0; i < queue.size(); ++i) settled[queue[i]] = judged[i];
+      for (std::size_t i = 0; i < queue.size(); ++i)
+        if (settled[i]) mark[queue[i]] |= kSettled;
     }
     const auto again = [&](std::uint32_t v) {
       for (const std::uint32_t f : faces_[v]) {
-        settled[f] = 0;
-        if (!queued[f]) {
-          queued[f] = 1;
-          queue.push_back(f);
-        }
+        if (!(mark[f] & kQueued)) queue.push_back(f);
+        mark[f] = kQueued;
       }
     };
     LocalPrism p;
     for (std::size_t head = 0; head < queue.size(); ++head) {
       if ((head & 1023) == 1023) monitor_.alive();
       const std::uint32_t f = queue[head];
-      queued[f] = 0;
-      if (settled[f]) continue;
+      const bool settled = mark[f] & kSettled;
+      mark[f] = 0;
+      if (settled) continue;
       prism(s, f, p);
-      if (unsettled(p)) settle(p, again);
+      settle(p, again);
     }
   }
 
@@ -385,14 +381,18 @@ class ShellSearch {
   /// for_each_queued_prism()'s first judgement.
   void lower_raised(State& s, const std::vector<double>& before, std::vector<std::uint32_t> queue,
                     double zero_volume_tolerance, double min_quality) const {
-    for_each_queued_prism(s, std::move(queue), zero_volume_tolerance, min_quality,
-                          [&](const LocalPrism& p, const auto& again) {
-                            for (const std::uint32_t v : surface_.triangles[p.face]) {
-                              if (s.t[v] == before[v]) continue;
-                              s.t[v] = before[v];
-                              again(v);
-                            }
-                          });
+    const auto send_back = [&](const LocalPrism& p, const auto& again) {
+      bool unsettled = false;
+      for_each_unsettled_tet(p, zero_volume_tolerance, min_quality,
+                             [&](const Tet&) { return unsettled = true; });
+      if (!unsettled) return;
+      for (const std::uint32_t v : surface_.triangles[p.face]) {
+        if (s.t[v] == before[v]) continue;
+        s.t[v] = before[v];
+        again(v);
+      }
+    };
+    for_each_queued_prism(s, std::move(queue), zero_volume_tolerance, min_quality, send_back);
   }
 
   /// Steps back, as a round does for an inverted or flat tet (its deepest movable inner corner),
@@ -408,22 +408,19 @@ class ShellSearch {
                              double zero_volume_tolerance, double min_quality,
                              std::vector<char>& lowered) const {
     std::size_t unwelded = 0;
-    for_each_queued_prism(s, std::move(queue), zero_volume_tolerance, min_quality,
-                          [&](const LocalPrism& p, const auto& again) {
-                            // The first offending tet with a movable corner steps back; the prism
-                            // is queued again.
-                            for_each_unsettled_tet(
-                                p, zero_volume_tolerance, min_quality, [&](const Tet& t) {
-                                  const std::uint32_t v = deepest_corner(s, p, t);
-                                  if (v == UINT32_MAX)
-                                    return false;  // at the floor: left to the checks
-                                  unwelded += step_back(s, v, shrink, [&](std::uint32_t u) {
-                                    lowered[u] = 1;
-                                    again(u);
-                                  });
-                                  return true;
-                                });
-                          });
+    // The first offending tet with a movable corner steps back; the prism is queued again.
+    const auto step_first = [&](const LocalPrism& p, const auto& again) {
+      for_each_unsettled_tet(p, zero_volume_tolerance, min_quality, [&](const Tet& t) {
+        const std::uint32_t v = deepest_corner(s, p, t);
+        if (v == UINT32_MAX) return false;  // at the floor: left to the checks
+        unwelded += step_back(s, v, shrink, [&](std::uint32_t u) {
+          lowered[u] = 1;
+          again(u);
+        });
+        return true;
+      });
+    };
+    for_each_queued_prism(s, std::move(queue), zero_volume_tolerance, min_quality, step_first);
     return unwelded;
   }
 
