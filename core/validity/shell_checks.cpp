@@ -72,8 +72,9 @@ void check_intersections(const SurfaceMesh& surface, const TetMesh& mesh,
     G = 1;
     key_count = assign_keys(G);
   }
-  TetGeometries geo(key_count);  // absent keys: empty boxes, the others set below
-  for_each_index(key_count, [&](std::size_t k) { geo[k] = TetGeometry{}; });
+  // Every key set once: each tet's, then the absent keys up to the next tet's (key_of ascends
+  // from 0) as empty boxes.
+  TetGeometries geo(key_count);
   std::vector<std::uint32_t> tet_of_key(key_count, 0);
   for_each_chunk(
       n,
@@ -81,6 +82,8 @@ void check_intersections(const SurfaceMesh& surface, const TetMesh& mesh,
         for (std::size_t k = begin; k != end; ++k) {
           geo[key_of[k]] = tet_geometry(tet_corners(mesh, tets[k]));
           tet_of_key[key_of[k]] = tets[k];
+          const std::uint64_t next = k + 1 < n ? key_of[k + 1] : key_count;
+          for (std::uint64_t j = key_of[k] + 1; j < next; ++j) geo[j] = TetGeometry{};
         }
       },
       1024);

@@ -17,17 +17,17 @@ namespace {
 TEST(IndexLists, InvertedListsHoldEveryItemAscendingForAnyThreadCount) {
   // 30,000 items (8 blocks) with 0-6 keys each, in any order, over 5,000 keys (5 ranges):
   // against a serial count of every (key, item) pair.
-  const std::size_t n = 30000, num_cells = 5000;
+  const std::size_t n = 30000, num_keys = 5000;
   std::mt19937 rng(3);
   std::vector<std::vector<std::uint32_t>> lists(n);
   for (auto& l : lists) {
-    std::uniform_int_distribution<std::uint32_t> cell(0, num_cells - 1);
-    for (std::size_t k = rng() % 7; k > 0; --k) l.push_back(cell(rng));
+    std::uniform_int_distribution<std::uint32_t> key(0, num_keys - 1);
+    for (std::size_t k = rng() % 7; k > 0; --k) l.push_back(key(rng));
     std::sort(l.begin(), l.end());
     l.erase(std::unique(l.begin(), l.end()), l.end());
     std::shuffle(l.begin(), l.end(), rng);
   }
-  std::vector<std::vector<std::uint32_t>> expected(num_cells);
+  std::vector<std::vector<std::uint32_t>> expected(num_keys);
   for (std::uint32_t i = 0; i < n; ++i)
     for (const std::uint32_t c : lists[i]) expected[c].push_back(i);
   for (const int threads : {1, 4}) {
@@ -40,11 +40,11 @@ TEST(IndexLists, InvertedListsHoldEveryItemAscendingForAnyThreadCount) {
           [&](std::size_t i) {
             return std::pair{lists[i].data(), lists[i].data() + lists[i].size()};
           },
-          num_cells, start, items);
+          num_keys, start, items);
     });
-    ASSERT_EQ(start.size(), num_cells + 1);
+    ASSERT_EQ(start.size(), num_keys + 1);
     ASSERT_EQ(start.back(), items.size());
-    for (std::size_t c = 0; c < num_cells; ++c)
+    for (std::size_t c = 0; c < num_keys; ++c)
       ASSERT_EQ(
           std::vector<std::uint32_t>(items.begin() + static_cast<std::ptrdiff_t>(start[c]),
                                      items.begin() + static_cast<std::ptrdiff_t>(start[c + 1])),
