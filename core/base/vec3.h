@@ -63,11 +63,15 @@ inline Vec3d normalized(const Vec3d& v) {
 inline bool is_finite(const Vec3d& v) {
   return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
 }
+/// std::fmin() and std::fmax() (a NaN argument loses to a number), inline: the library calls
+/// cost more than the comparison in the boxes of every tet.
+inline double min_number(double a, double b) { return std::isnan(a) || b < a ? b : a; }
+inline double max_number(double a, double b) { return std::isnan(a) || b > a ? b : a; }
 inline Vec3d min_of(const Vec3d& a, const Vec3d& b) {
-  return {std::fmin(a.x, b.x), std::fmin(a.y, b.y), std::fmin(a.z, b.z)};
+  return {min_number(a.x, b.x), min_number(a.y, b.y), min_number(a.z, b.z)};
 }
 inline Vec3d max_of(const Vec3d& a, const Vec3d& b) {
-  return {std::fmax(a.x, b.x), std::fmax(a.y, b.y), std::fmax(a.z, b.z)};
+  return {max_number(a.x, b.x), max_number(a.y, b.y), max_number(a.z, b.z)};
 }
 
 /// Signed volume of tet (a, b, c, d): positive when d lies on the side of triangle (a, b, c)
@@ -90,7 +94,7 @@ struct BBox {
   double diagonal() const { return norm(extent()); }
   double max_side() const {
     const Vec3d e = extent();
-    return std::fmax(e.x, std::fmax(e.y, e.z));
+    return max_number(e.x, max_number(e.y, e.z));
   }
 };
 

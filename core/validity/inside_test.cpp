@@ -29,8 +29,11 @@ RayHit ray_meets(const Ray& ray, const Vec3d& a, const Vec3d& b, const Vec3d& c,
   // Signed distances (2D) of the projected point from the projected edges, positive inside.
   const double au = a[u], av = a[v], bu = b[u], bv = b[v], cu = c[u], cv = c[v];
   const double d = (bu - au) * (cv - av) - (bv - av) * (cu - au);
-  const double l_bc = std::hypot(cu - bu, cv - bv), l_ca = std::hypot(au - cu, av - cv),
-               l_ab = std::hypot(bu - au, bv - av);
+  // Lengths by sqrt, not std::hypot (several times slower): the squares overflow only for
+  // coordinates over 1e154, where the tets' own squared lengths (tet_geometry()) already would.
+  const auto length = [](double x, double y) { return std::sqrt(x * x + y * y); };
+  const double l_bc = length(cu - bu, cv - bv), l_ca = length(au - cu, av - cv),
+               l_ab = length(bu - au, bv - av);
   const double l_max = std::max({l_bc, l_ca, l_ab});
   if (std::abs(d) <= eps * l_max) {  // seen edge-on: the ray may graze it
     const bool near =
