@@ -333,6 +333,7 @@ BroadPhase::BroadPhase(const SurfaceMesh& surface, const BBox& box, double cell_
   box_.resize(geo_.size());
   present_.assign(geo_.size(), 0);
   slot_box_.resize(groups);
+  slot_diagonals_.resize(groups);
   corners_.resize(geo_.size() * 4);
   corner_count_.assign(groups, 0);
   state_.assign(groups, kAbsent);
@@ -469,6 +470,16 @@ void BroadPhase::reenter(const std::vector<std::uint32_t>& slots, bool was_empty
     count = static_cast<std::uint32_t>(std::unique(corners, corners + count) - corners);
     slot_box_[s] = b;
     corner_count_[s] = count;
+    std::array<double, 8>& d = slot_diagonals_[s];
+    for (int k = 0; k < 4; ++k) d[k] = INFINITY, d[4 + k] = -INFINITY;
+    for (std::uint32_t c = 0; c < count; ++c) {
+      const Vec3d& p = corners[c];
+      const double along[4] = {p.x + p.y + p.z, p.x + p.y - p.z, p.x - p.y + p.z, -p.x + p.y + p.z};
+      for (int k = 0; k < 4; ++k) {
+        d[k] = std::min(d[k], along[k]);
+        d[4 + k] = std::max(d[4 + k], along[k]);
+      }
+    }
   });
   const auto in_grid = [&](std::size_t i) { return !stray[i] && !slot_box_[slots[i]].empty(); };
   std::vector<std::uint64_t> start;

@@ -178,6 +178,12 @@ class BroadPhase {
   const BBox& box_at(std::uint32_t index) const { return box_[index]; }
   /// The box of the present tets of the group in `slot`.
   const BBox& slot_box(std::uint32_t slot) const { return slot_box_[slot]; }
+  /// The extents of the present tets of the group in `slot` along the body diagonals (1, 1, 1),
+  /// (1, 1, -1), (1, -1, 1) and (-1, 1, 1) (unnormalised): the lows in [0, 4), the highs in
+  /// [4, 8). With the box, a 14-sided hull, far tighter than the box around a slanted prism.
+  const std::array<double, 8>& slot_diagonals(std::uint32_t slot) const {
+    return slot_diagonals_[slot];
+  }
   /// The distinct corners of the present tets of the group in `slot`, side by side.
   const Vec3d* slot_corners(std::uint32_t slot) const {
     return corners_.data() + std::size_t{4} * group_ * slot;
@@ -228,6 +234,7 @@ class BroadPhase {
   std::vector<Vec3d> corners_;               // per slot 4 group_ entries, the first corner_count_
   std::vector<std::uint32_t> corner_count_;  // per slot
   std::vector<State> state_;                 // per slot
+  std::vector<std::array<double, 8>> slot_diagonals_;  // per slot
   std::size_t size_ = 0;
   PooledLists slot_cells_;                  // per slot: its cells, ascending (none when stray)
   PooledLists cell_slots_;                  // per cell: its slots, ascending
