@@ -35,6 +35,27 @@ struct Worst {
       volume += tet_volume(a, b, c, d);
     }
   }
+  /// add(), stopping with false at the first tet below `o`'s smallest ratio or angle (the
+  /// ratios first: the angles cost more), when improves_on(o) can no longer hold.
+  template <class It, class At>
+  bool add_unless_below(const TetMesh& mesh, It begin, It end, const At& at, const Worst& o) {
+    const auto corners = [&](It it) {
+      const Tet& tet = tet_of(mesh, *it);
+      return std::array<Vec3d, 4>{at(tet[0]), at(tet[1]), at(tet[2]), at(tet[3])};
+    };
+    for (It it = begin; it != end; ++it) {
+      const std::array<Vec3d, 4> c = corners(it);
+      quality = std::min(quality, tet_quality(c[0], c[1], c[2], c[3]));
+      if (quality < o.quality) return false;
+      volume += tet_volume(c[0], c[1], c[2], c[3]);
+    }
+    for (It it = begin; it != end; ++it) {
+      const std::array<Vec3d, 4> c = corners(it);
+      dihedral = std::min(dihedral, tet_min_dihedral_deg(c[0], c[1], c[2], c[3]));
+      if (dihedral < o.dihedral) return false;
+    }
+    return true;
+  }
   /// The same, the corners where they are.
   template <class It>
   void add(const TetMesh& mesh, It begin, It end) {
@@ -347,7 +368,7 @@ OptimizeReport optimize_shell(const SurfaceMesh& surface, const std::vector<doub
           if (distance(candidate, surface.points[v]) > limit[v]) within = false;
         if (!within) continue;
         Worst after;
-        after.add(mesh, ring[i].begin(), ring[i].end(), [&](std::uint32_t v) {
+        const auto at = [&](std::uint32_t v) {
           if (v == pi) return candidate;
           for (const std::uint32_t d : layer.of[i])
             if (v == layer.point[d]) {
@@ -355,8 +376,10 @@ OptimizeReport optimize_shell(const SurfaceMesh& surface, const std::vector<doub
               return s + (candidate - s) * layer.at[d];
             }
           return mesh.points[v];
-        });
-        if (!after.improves_on(worst)) continue;
+        };
+        if (!after.add_unless_below(mesh, ring[i].begin(), ring[i].end(), at, worst) ||
+            !after.improves_on(worst))
+          continue;
         trial.at[step] = candidate;
         trial.improves[step] = 1;
         trial.lost[step] = std::max(0.0, worst.volume - after.volume);
