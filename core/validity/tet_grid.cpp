@@ -146,7 +146,7 @@ double grid_cell_size(const TetGeometries& geo, const BBox& all) {
       });
   const double n = sums[0];
   const double mean_volume = n > 0.0 ? sums[1] / n : 0.0, mean_side = n > 0.0 ? sums[2] / n : 0.0;
-  double h = std::max(1.5 * std::cbrt(mean_volume), mean_side / 8.0);
+  double h = std::max(3.0 * std::cbrt(mean_volume), mean_side / 4.0);
   if (!(h > 0.0)) h = all.max_side() > 0.0 ? all.max_side() : 1.0;
   const Vec3d ext = all.extent();
   // The mean count of cells a tet enters, over every stride-th tet.

@@ -77,12 +77,13 @@ using TetGeometries = std::vector<TetGeometry, UninitializedAllocator<TetGeometr
 BBox bounding_box_of(const TetGeometries& geo);
 
 /// Cell size (world units) of a TetGrid over `all` for the tets `geo`: about the edge of a cube of
-/// 1.5^3 times the mean tet volume (at least an eighth of the tets' mean box side), so that
-/// slivers enter few cells, made larger until `all` has at most 32 cells per tet and, on average,
-/// the tets' boxes span at most 64 columns (i, j) of cells and the tets enter at most 64 cells
-/// (counted on a sample of 4,096 tets): the cell lists hold at most about 64 entries per tet.
-/// Long needles converging on a point (a sphere's shell) keep small cells: each enters the cells
-/// along it, not those of its box.
+/// 3^3 times the mean tet volume (at least a quarter of the tets' mean box side), so that
+/// slivers enter few cells (with far groups rejected by their extents first, larger cells cost
+/// less than a group's entries in many small ones), made larger until `all` has at most 32 cells
+/// per tet and, on average, the tets' boxes span at most 64 columns (i, j) of cells and the tets
+/// enter at most 64 cells (counted on a sample of 4,096 tets): the cell lists hold at most about 64
+/// entries per tet. Long needles converging on a point (a sphere's shell) keep small cells: each
+/// enters the cells along it, not those of its box.
 double grid_cell_size(const TetGeometries& geo, const BBox& all);
 
 /// Lists of 32-bit values, one per slot, in one pool: built all at once (as a CSR array), then
