@@ -2,6 +2,7 @@
 #include "core/validity/tet_grid.h"
 
 #include <array>
+#include <cfloat>
 #include <cmath>
 #include <utility>
 
@@ -475,9 +476,12 @@ void BroadPhase::reenter(const std::vector<std::uint32_t>& slots, bool was_empty
     for (std::uint32_t c = 0; c < count; ++c) {
       const Vec3d& p = corners[c];
       const double along[4] = {p.x + p.y + p.z, p.x + p.y - p.z, p.x - p.y + p.z, -p.x + p.y + p.z};
+      // Widened by more than the sums' rounding: far from the origin the extents still hold
+      // the corners, and groups they find apart are apart.
+      const double e = 4 * DBL_EPSILON * (std::abs(p.x) + std::abs(p.y) + std::abs(p.z));
       for (int k = 0; k < 4; ++k) {
-        d[k] = std::min(d[k], along[k]);
-        d[4 + k] = std::max(d[4 + k], along[k]);
+        d[k] = std::min(d[k], along[k] - e);
+        d[4 + k] = std::max(d[4 + k], along[k] + e);
       }
     }
   });

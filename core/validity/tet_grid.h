@@ -180,8 +180,9 @@ class BroadPhase {
   /// The box of the present tets of the group in `slot`.
   const BBox& slot_box(std::uint32_t slot) const { return slot_box_[slot]; }
   /// The extents of the present tets of the group in `slot` along the body diagonals (1, 1, 1),
-  /// (1, 1, -1), (1, -1, 1) and (-1, 1, 1) (unnormalised): the lows in [0, 4), the highs in
-  /// [4, 8). With the box, a 14-sided hull, far tighter than the box around a slanted prism.
+  /// (1, 1, -1), (1, -1, 1) and (-1, 1, 1) (unnormalised, widened by more than their rounding):
+  /// the lows in [0, 4), the highs in [4, 8). With the box, a 14-sided hull, far tighter than the
+  /// box around a slanted prism.
   const std::array<double, 8>& slot_diagonals(std::uint32_t slot) const {
     return slot_diagonals_[slot];
   }
