@@ -321,10 +321,7 @@ class ShellSearch {
             LocalPrism p;
             for (std::size_t i = begin; i != end; ++i) {
               prism(s, queue[i], p);
-              for_each_unsettled_tet(p, zero_volume_tolerance, min_quality, [&](const Tet&) {
-                settled[i] = 0;
-                return true;
-              });
+              settled[i] = !has_unsettled_tet(p, zero_volume_tolerance, min_quality);
             }
           },
           256);
@@ -374,6 +371,15 @@ class ShellSearch {
     }
   }
 
+  /// Whether for_each_unsettled_tet() visits a tet of `p`.
+  bool has_unsettled_tet(const LocalPrism& p, double zero_volume_tolerance,
+                         double min_quality) const {
+    bool found = false;
+    for_each_unsettled_tet(p, zero_volume_tolerance, min_quality,
+                           [&](const Tet&) { return found = true; });
+    return found;
+  }
+
   /// Sends the raised vertices of the prisms in `queue`, and of those around every vertex sent
   /// back on the way, back to `before` (their depth before the raise) while a tet of the prism
   /// is one settle_volumes() does not accept. A vertex is raised while s.t[v] != before[v].
@@ -382,10 +388,7 @@ class ShellSearch {
   void lower_raised(State& s, const std::vector<double>& before, std::vector<std::uint32_t> queue,
                     double zero_volume_tolerance, double min_quality) const {
     const auto send_back = [&](const LocalPrism& p, const auto& again) {
-      bool unsettled = false;
-      for_each_unsettled_tet(p, zero_volume_tolerance, min_quality,
-                             [&](const Tet&) { return unsettled = true; });
-      if (!unsettled) return;
+      if (!has_unsettled_tet(p, zero_volume_tolerance, min_quality)) return;
       for (const std::uint32_t v : surface_.triangles[p.face]) {
         if (s.t[v] == before[v]) continue;
         s.t[v] = before[v];
