@@ -24,19 +24,9 @@ struct Worst {
   double quality = std::numeric_limits<double>::infinity();
   double dihedral = std::numeric_limits<double>::infinity();
   double volume = 0;  ///< of all the tets around the point
-  /// Takes in the tets [begin, end): indices into mesh.tets, or tets; their corner v at at(v).
-  template <class It, class At>
-  void add(const TetMesh& mesh, It begin, It end, const At& at) {
-    for (; begin != end; ++begin) {
-      const Tet& tet = tet_of(mesh, *begin);
-      const Vec3d a = at(tet[0]), b = at(tet[1]), c = at(tet[2]), d = at(tet[3]);
-      quality = std::min(quality, tet_quality(a, b, c, d));
-      dihedral = std::min(dihedral, tet_min_dihedral_deg(a, b, c, d));
-      volume += tet_volume(a, b, c, d);
-    }
-  }
-  /// add(), stopping with false at the first tet below `o`'s smallest ratio or angle (the
-  /// ratios first: the angles cost more), when improves_on(o) can no longer hold.
+  /// Takes in the tets [begin, end) (indices into mesh.tets, or tets; their corner v at at(v)),
+  /// stopping with false at the first tet below `o`'s smallest ratio or angle (the ratios first:
+  /// the angles cost more), when improves_on(o) can no longer hold.
   template <class It, class At>
   bool add_unless_below(const TetMesh& mesh, It begin, It end, const At& at, const Worst& o) {
     const auto corners = [&](It it) {
@@ -56,10 +46,13 @@ struct Worst {
     }
     return true;
   }
-  /// The same, the corners where they are.
+  /// Takes in all the tets [begin, end), the corners where they are.
   template <class It>
   void add(const TetMesh& mesh, It begin, It end) {
-    add(mesh, begin, end, [&](std::uint32_t v) { return mesh.points[v]; });
+    constexpr double kLowest = -std::numeric_limits<double>::infinity();
+    add_unless_below(
+        mesh, begin, end, [&](std::uint32_t v) { return mesh.points[v]; },
+        Worst{kLowest, kLowest, 0});
   }
   static const Tet& tet_of(const TetMesh& mesh, std::uint32_t t) { return mesh.tets[t]; }
   static const Tet& tet_of(const TetMesh&, const Tet& tet) { return tet; }
