@@ -11,6 +11,20 @@
 
 namespace vdb_shell {
 
+namespace {
+
+// The largest float not above x, and the smallest not below it.
+float float_below(double x) {
+  const float f = static_cast<float>(x);
+  return static_cast<double>(f) > x ? std::nextafter(f, -INFINITY) : f;
+}
+float float_above(double x) {
+  const float f = static_cast<float>(x);
+  return static_cast<double>(f) < x ? std::nextafter(f, INFINITY) : f;
+}
+
+}  // namespace
+
 // ---------------------------------------------------------------------------------------------
 // TetGrid
 
@@ -334,7 +348,7 @@ BroadPhase::BroadPhase(const SurfaceMesh& surface, const BBox& box, double cell_
   box_.resize(geo_.size());
   present_.assign(geo_.size(), 0);
   slot_box_.resize(groups);
-  slot_diagonals_.resize(groups);
+  slot_bounds_.resize(groups);
   corners_.resize(geo_.size() * 4);
   corner_count_.assign(groups, 0);
   state_.assign(groups, kAbsent);
@@ -471,19 +485,29 @@ void BroadPhase::reenter(const std::vector<std::uint32_t>& slots, bool was_empty
     count = static_cast<std::uint32_t>(std::unique(corners, corners + count) - corners);
     slot_box_[s] = b;
     corner_count_[s] = count;
-    std::array<double, 8>& d = slot_diagonals_[s];
-    for (int k = 0; k < 4; ++k) d[k] = INFINITY, d[4 + k] = -INFINITY;
+    // Relative to the grid's corner: subtracting one origin from every value keeps their order,
+    // and the floats keep the precision of the grid's scale wherever it lies.
+    const Vec3d& o = grid_.box().lo;
+    double lo[7], hi[7];
+    for (int a = 0; a < 3; ++a) lo[a] = b.lo[a] - o[a], hi[a] = b.hi[a] - o[a];
+    for (int k = 3; k < 7; ++k) lo[k] = INFINITY, hi[k] = -INFINITY;
     for (std::uint32_t c = 0; c < count; ++c) {
-      const Vec3d& p = corners[c];
-      const double along[4] = {p.x + p.y + p.z, p.x + p.y - p.z, p.x - p.y + p.z, -p.x + p.y + p.z};
-      // Widened by more than the sums' rounding: far from the origin the extents still hold
-      // the corners, and groups they find apart are apart.
-      const double e = 4 * DBL_EPSILON * (std::abs(p.x) + std::abs(p.y) + std::abs(p.z));
+      const Vec3d q = corners[c] - o;
+      const double along[4] = {q.x + q.y + q.z, q.x + q.y - q.z, q.x - q.y + q.z, -q.x + q.y + q.z};
+      // Widened by more than the sums' and the subtraction's rounding: far from the origin the
+      // extents still hold the corners, and groups they find apart are apart.
+      const double e = 4 * DBL_EPSILON * (std::abs(q.x) + std::abs(q.y) + std::abs(q.z));
       for (int k = 0; k < 4; ++k) {
-        d[k] = std::min(d[k], along[k] - e);
-        d[4 + k] = std::max(d[4 + k], along[k] + e);
+        lo[3 + k] = std::min(lo[3 + k], along[k] - e);
+        hi[3 + k] = std::max(hi[3 + k], along[k] + e);
       }
     }
+    SlotBounds& bounds = slot_bounds_[s];
+    for (int k = 0; k < 7; ++k) {
+      bounds.lo[k] = float_below(lo[k]);
+      bounds.hi[k] = float_above(hi[k]);
+    }
+    bounds.lo[7] = bounds.hi[7] = 0.0f;
   });
   const auto in_grid = [&](std::size_t i) { return !stray[i] && !slot_box_[slots[i]].empty(); };
   std::vector<std::uint64_t> start;

@@ -72,13 +72,6 @@ struct GroupHull {
   }
 };
 
-// Whether two groups' extents along the body diagonals (BroadPhase::slot_diagonals()) overlap,
-// closed, as boxes_overlap(): when they do not, neither do the groups' hulls.
-bool diagonals_overlap(const std::array<double, 8>& a, const std::array<double, 8>& b) {
-  return a[0] <= b[4] && b[0] <= a[4] && a[1] <= b[5] && b[1] <= a[5] && a[2] <= b[6] &&
-         b[2] <= a[6] && a[3] <= b[7] && b[3] <= a[7];
-}
-
 // Per chunk of queries: marks of the groups (by slot) and triangles met by the current group
 // (entries equal to its slot + 1), so that one met in several cells is tested once, and the
 // current group's hull (groups of more than one tet).
@@ -109,12 +102,11 @@ void find_overlaps(const BroadPhase& phase, const Queries& queries, const GroupQ
   const std::uint32_t* query = queries.query.data() + group.first;
   std::vector<std::size_t>& candidates = scratch.candidates;  // counted here, not in `found`
   candidates.assign(group.count, 0);
+  const BroadPhase::SlotBounds& bounds = phase.slot_bounds(group.slot);
   // With every tet a query, the smaller slots of a cell are skipped before they are visited.
   phase.for_each_group_near(
       group.slot, all_queries, scratch.groups, group.slot + 1, [&](std::uint32_t other) {
-        if (!boxes_overlap(phase.slot_box(group.slot), phase.slot_box(other)) ||
-            !diagonals_overlap(phase.slot_diagonals(group.slot), phase.slot_diagonals(other)))
-          return;
+        if (!slot_bounds_overlap(bounds, phase.slot_bounds(other))) return;
         if (G > 1 && other != group.slot &&
             scratch.hull.separates(phase.slot_corners(other), phase.slot_corner_count(other)))
           return;
