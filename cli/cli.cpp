@@ -581,6 +581,10 @@ void register_options(CLI::App& app, CliOptions& opt) {
   app.add_option("--integrator", opt.integrator, "euler (the paper's), rk2 or rk4")
       ->check(CLI::IsMember({"euler", "rk2", "rk4"}))
       ->group(tg);
+  app.add_option("--min-step", opt.shell.trace.min_step,
+                 "Shortest step where |grad phi| < 1 shortens it, a fraction of --step (paper: 0)")
+      ->check(CLI::Range(0.0, 1.0))
+      ->group(tg);
   app.add_option("--paths", opt.paths, "Write the traces as VTK polylines (.vtk)")->group(tg);
 
   const char* th = "Thickness";

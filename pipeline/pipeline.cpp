@@ -405,6 +405,8 @@ void check_options(const ShellOptions& o) {
           "--layer-ratio", o.validity.layer_ratio, "must be in [0.1, 10]");
   require(o.optimize.max_coverage_loss >= 0 && o.optimize.max_coverage_loss <= 0.1,
           "--max-coverage-loss", o.optimize.max_coverage_loss, "must be in [0, 0.1]");
+  require(o.trace.min_step >= 0 && o.trace.min_step <= 1, "--min-step", o.trace.min_step,
+          "must be in [0, 1] (a fraction of the step; 0: the paper's)");
   require(o.adaptivity >= 0 && o.adaptivity <= 1, "--adaptivity", o.adaptivity,
           "must be in [0, 1]");
   require(o.threads >= 0, "--threads", o.threads, "must be >= 0 (0: all cores)");
@@ -580,6 +582,7 @@ std::string report_json(const ShellResult& r, const ReportFiles& files, double r
       {"step", traces.parameters.step},
       {"point_size", traces.parameters.point_size},
       {"integrator", to_string(r.options.trace.integrator)},
+      {"min_step", r.options.trace.min_step},
       {"planar_vertices", std::count(traces.planar.begin(), traces.planar.end(), std::uint8_t{1})},
       {"samples", traces.samples.size()}};
   j["stop_reasons"] = {{"critical", traces.stops(StopReason::kCritical)},

@@ -184,6 +184,10 @@ const std::vector<OptionSpec>& option_specs() {
        [](const ShellOptions& o) {
          return "'" + std::string(to_string(o.trace.integrator)) + "'";
        }},
+      {"min_step", "--min-step",
+       "shortest step where |grad phi| < 1 shortens it, a fraction of step (paper: 0)",
+       [](ShellOptions& o, py::handle v, const char* n) { o.trace.min_step = to_float(v, n); },
+       [](const ShellOptions& o) { return number_text(o.trace.min_step); }},
       {"max_thickness", "--max-thickness",
        "largest thickness along the trace, input units (0: no limit)",
        [](ShellOptions& o, py::handle v, const char* n) {

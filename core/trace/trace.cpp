@@ -103,7 +103,10 @@ void trace_one(FieldProbe& probe, const Vec3d& p, bool planar, const TraceOption
       t.stop = StopReason::kCap;
       return;
     }
-    const Vec3d next = q - step_direction(probe, q, g, par.step, opt.integrator) * par.step;
+    Vec3d d = step_direction(probe, q, g, par.step, opt.integrator);
+    const double d2 = norm2(d);
+    if (d2 > 0.0 && d2 < opt.min_step * opt.min_step) d = d * (opt.min_step / std::sqrt(d2));
+    const Vec3d next = q - d * par.step;
     t.arc.push_back(t.arc.back() + distance(next, q));
     t.samples.push_back(next);
     prev_g = g;
@@ -173,6 +176,8 @@ TraceParameters derive_trace_parameters(const TraceOptions& o, double voxel_size
     throw InputError("--merge-angle must lie in [0, 180] degrees");
   if (!(o.flux_threshold > -1.0 && o.flux_threshold < 1.0))
     throw InputError("--flux-threshold must lie in (-1, 1) (average outward flux)");
+  if (!(o.min_step >= 0.0 && o.min_step <= 1.0))
+    throw InputError("--min-step must lie in [0, 1] (a fraction of the step; 0: the paper's)");
   TraceParameters p;
   p.step = o.step > 0.0 ? o.step : 0.5 * voxel_size;
   p.point_size = o.point_size > 0.0 ? o.point_size : std::sqrt(3.0) * voxel_size;

@@ -2,7 +2,9 @@
 // docs/architecture.md).
 //
 // Every surface vertex p is traced inward, q <- q - step * g with g = grad(phi)(q) normalised
-// only when |g| > 1 (eq. 1, 2, 4, 5), or with a higher-order integrator of the same field.
+// only when |g| > 1 (eq. 1, 2, 4, 5), or with a higher-order integrator of the same field; where
+// |g| is smaller than `min_step` (beyond the paper, whose steps shrink with |g|: along a medial
+// ridge, where |g| ~ 0.1, traces would crawl at a tenth of a step), g is lengthened to it.
 // A trace stops at
 //   * a critical point: |g|^2 < c |g(p)|^2 (eq. 4), or g reversing direction (the point was
 //     passed);
@@ -49,7 +51,8 @@ struct TraceOptions {
                                 ///< normals lie within this angle of each other
   double merge_angle = 60.0;    ///< degrees; traces meeting at a smaller angle do not merge
   Integrator integrator = Integrator::kRk2;
-  int max_steps = 0;  ///< 0: 4 * (bbox diagonal / step) + 16
+  double min_step = 0.25;  ///< the shortest step, as a fraction of `step`, in [0, 1] (paper: 0)
+  int max_steps = 0;       ///< 0: 4 * (bbox diagonal / step) + 16
 };
 
 /// Step, point size and cap after defaults are applied — one pure function computes them.

@@ -4,12 +4,13 @@
 // the exact field.
 //
 // Not part of the test run. Usage:
-//   vdb_shell_bench_traces [--no-large] [MESH[@RESOLUTION] ...]
+//   vdb_shell_bench_traces [--no-large] [--min-step F ...] [MESH[@RESOLUTION] ...]
 //   vdb_shell_bench_traces --straightness
 // Without MESH: the Table 1 shapes (assets/shapes.h, detail 1) at 128^3, then at 512^3
 // ../shared/meshes/fandisk.obj and make_shape("box", 46) (101,568 faces); --no-large skips the
 // two 512^3 runs. Each mesh's fields are built once (all threads); each thread count then traces
-// it once with the default options (RK2). "trace" is the integration,
+// it once with the default options (RK2), or once per --min-step given (TraceOptions::min_step,
+// the shortest step as a fraction of the step; 0: the paper's). "trace" is the integration,
 // "merge" the merge resolution; traces/s = traces / (trace + merge). The 2-thread result is
 // checked byte for byte against the 1-thread one. Prints Markdown.
 //
@@ -61,13 +62,14 @@ bool identical(const TraceResult& a, const TraceResult& b) {
          same_bytes(a.merged_with, b.merged_with);
 }
 
-TraceResult trace_with_threads(const Job& job, const Fields& fields, int threads) {
+TraceResult trace_with_threads(const Job& job, const Fields& fields, const TraceOptions& options,
+                               int threads) {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
                             static_cast<std::size_t>(threads));
-  return trace_paths(job.mesh, fields, TraceOptions{});
+  return trace_paths(job.mesh, fields, options);
 }
 
-void run(const Job& job) {
+void run(const Job& job, const std::vector<double>& min_steps) {
   FieldOptions options;
   options.resolution = job.resolution;
   options.max_memory_gb = 16.0;
@@ -76,25 +78,29 @@ void run(const Job& job) {
   const double field_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
-  const TraceResult one = trace_with_threads(job, *fields, 1);
-  const TraceResult two = trace_with_threads(job, *fields, 2);
-  const double total1 = one.seconds_tracing + one.seconds_merging;
-  for (const TraceResult* r : {&one, &two}) {
-    const int threads = r == &one ? 1 : 2;
-    const double total = r->seconds_tracing + r->seconds_merging;
-    char speed_up[32];
-    std::snprintf(speed_up, sizeof speed_up, "%.2f", total > 0 ? total1 / total : 0.0);
-    std::printf(
-        "| %s | %zu | %d | %.2f | %d | %.3f | %.3f | %.3f | %.0f | %s | %zu/%zu/%zu/%zu "
-        "| %.1f | %s |\n",
-        job.label.c_str(), job.mesh.triangles.size(), job.resolution, field_seconds, threads,
-        r->seconds_tracing, r->seconds_merging, total,
-        total > 0 ? static_cast<double>(r->num_traces()) / total : 0.0, speed_up,
-        r->stops(StopReason::kCritical), r->stops(StopReason::kMerge), r->stops(StopReason::kFlux),
-        r->stops(StopReason::kCap),
-        static_cast<double>(r->samples.size()) / static_cast<double>(r->num_traces()),
-        threads == 1 ? "" : (identical(one, two) ? "yes" : "NO"));
-    std::fflush(stdout);
+  for (const double min_step : min_steps) {
+    TraceOptions trace;
+    trace.min_step = min_step;
+    const TraceResult one = trace_with_threads(job, *fields, trace, 1);
+    const TraceResult two = trace_with_threads(job, *fields, trace, 2);
+    const double total1 = one.seconds_tracing + one.seconds_merging;
+    for (const TraceResult* r : {&one, &two}) {
+      const int threads = r == &one ? 1 : 2;
+      const double total = r->seconds_tracing + r->seconds_merging;
+      char speed_up[32];
+      std::snprintf(speed_up, sizeof speed_up, "%.2f", total > 0 ? total1 / total : 0.0);
+      std::printf(
+          "| %s | %zu | %d | %.2f | %g | %d | %.3f | %.3f | %.3f | %.0f | %s | %zu/%zu/%zu/%zu "
+          "| %.1f | %s |\n",
+          job.label.c_str(), job.mesh.triangles.size(), job.resolution, field_seconds, min_step,
+          threads, r->seconds_tracing, r->seconds_merging, total,
+          total > 0 ? static_cast<double>(r->num_traces()) / total : 0.0, speed_up,
+          r->stops(StopReason::kCritical), r->stops(StopReason::kMerge),
+          r->stops(StopReason::kFlux), r->stops(StopReason::kCap),
+          static_cast<double>(r->samples.size()) / static_cast<double>(r->num_traces()),
+          threads == 1 ? "" : (identical(one, two) ? "yes" : "NO"));
+      std::fflush(stdout);
+    }
   }
 }
 
@@ -135,10 +141,15 @@ int main(int argc, char** argv) {
   try {
     bool large = true;
     std::vector<Job> jobs;
+    std::vector<double> min_steps;
     for (int a = 1; a < argc; ++a) {
       std::string arg = argv[a];
       if (arg == "--no-large") {
         large = false;
+        continue;
+      }
+      if (arg == "--min-step" && a + 1 < argc) {
+        min_steps.push_back(std::atof(argv[++a]));
         continue;
       }
       if (arg == "--straightness") {
@@ -168,11 +179,12 @@ int main(int argc, char** argv) {
       }
     }
     std::printf(
-        "| mesh | faces | resolution | fields, s (all threads) | threads | trace, s "
+        "| mesh | faces | resolution | fields, s (all threads) | min step | threads | trace, s "
         "| merge, s | total, s | traces/s | speed-up | stops crit/merge/flux/cap "
         "| samples/trace | same as 1 thread |\n"
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
-    for (const Job& job : jobs) run(job);
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    if (min_steps.empty()) min_steps.push_back(TraceOptions{}.min_step);
+    for (const Job& job : jobs) run(job, min_steps);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "vdb_shell_bench_traces: %s\n", e.what());
     return 1;

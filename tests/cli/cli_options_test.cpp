@@ -131,6 +131,13 @@ const std::vector<ReportCase>& report_cases() {
          EXPECT_EQ(j["trace"]["integrator"], "euler");
          EXPECT_NE(samples(j), samples(b));
        }},
+      {"--min-step",
+       {"--min-step", "0"},
+       [](const json& b, const json& j) {  // the paper's steps: shorter where |grad phi| < 1
+         EXPECT_DOUBLE_EQ(b["trace"]["min_step"].get<double>(), 0.25);
+         EXPECT_DOUBLE_EQ(j["trace"]["min_step"].get<double>(), 0.0);
+         EXPECT_GT(samples(j), samples(b));
+       }},
       {"--resolution",
        {"-r", "24"},
        [](const json& b, const json& j) {  // voxel = longest side / resolution

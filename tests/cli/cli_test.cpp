@@ -285,11 +285,20 @@ TEST(CliMemory, AStageOverTheBudgetExits3NamingItAndWritesNothing) {
   TempDir dir;
   const std::string in = dir.file("sphere.obj");
   write_surface(in, make_shape("sphere", 1));
-  // Long traces (an eighth of a voxel per step) on a small field: the traces, then the --grids
-  // file's points, outgrow every stage before them.
-  const std::vector<std::string> run = {
-      in,  "-r", "16", "--step", "0.0078125", "-o", dir.file("s.vtu"), "--grids", dir.file("g.vdb"),
-      "-q"};
+  // Long traces (an eighth of a voxel per step, shrinking with |grad phi|) on a small field: the
+  // traces, then the --grids file's points, outgrow every stage before them.
+  const std::vector<std::string> run = {in,
+                                        "-r",
+                                        "16",
+                                        "--step",
+                                        "0.0078125",
+                                        "--min-step",
+                                        "0",
+                                        "-o",
+                                        dir.file("s.vtu"),
+                                        "--grids",
+                                        dir.file("g.vdb"),
+                                        "-q"};
   auto with = [&](std::vector<std::string> extra) {
     std::vector<std::string> args = run;
     args.insert(args.end(), extra.begin(), extra.end());

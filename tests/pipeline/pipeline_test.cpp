@@ -57,6 +57,7 @@ TEST(Pipeline, ReportHasEveryDocumentedKey) {
                           "/fields/strategy",
                           "/trace/step",
                           "/trace/integrator",
+                          "/trace/min_step",
                           "/shell/file",
                           "/shell/tets",
                           "/shell/coverage",
@@ -779,6 +780,7 @@ TEST(PipelineCli, BadOptionsExit2AndWriteNothing) {
   expect_rejected("-o '" + dir.file("s.xyz") + "'", dir.file("s.xyz"));
   expect_rejected("-o '" + dir.file("s.vtu") + "' --integrator midpoint", dir.file("s.vtu"));
   expect_rejected("-o '" + dir.file("s.vtu") + "' --flux-threshold 3", dir.file("s.vtu"));
+  expect_rejected("-o '" + dir.file("s.vtu") + "' --min-step 2", dir.file("s.vtu"));
   expect_rejected("-o '" + dir.file("nofolder/s.vtu") + "'", dir.file("nofolder/s.vtu"));
   expect_rejected("-o '" + dir.file("s.vtu") + "' --quiet --verbose", dir.file("s.vtu"));
   expect_rejected("-o '" + dir.file("s.vtu") + "' --progress --no-progress", dir.file("s.vtu"));

@@ -329,6 +329,7 @@ def test_unknown_option_lists_the_known_ones(sphere):
     ({"layers": 2.5}, ["layers", "integer"]),
     ({"layer_ratio": 20}, ["layer_ratio 20", "[0.1, 10]"]),
     ({"max_coverage_loss": 0.5}, ["max_coverage_loss 0.5", "[0, 0.1]"]),
+    ({"min_step": 1.5}, ["min_step 1.5", "[0, 1]"]),
     ({"max_memory": 0}, ["max_memory 0"]),
     ({"threads": -2}, ["threads -2"]),
     ({"threads": 2**40}, ["threads", "out of range"]),

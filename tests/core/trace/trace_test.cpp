@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "assets/shapes.h"
 #include "core/base/errors.h"
@@ -124,6 +125,38 @@ TEST(Trace, SameResultForAnyThreadCount) {
   }
 }
 
+TEST(Trace, MinStepKeepsStepsLongWhereTheGradientIsShort) {
+  // A cube's corners and edges reach its medial surface, where the central differences of |phi|
+  // cancel across the ridge: the paper's steps (min_step 0) shrink there with |grad phi|.
+  const double voxel = 1.0 / 64.0;
+  const SurfaceMesh box = make_shape("box", 4);
+  const auto field = test::box_field({0.5, 0.5, 0.5}, voxel);
+  auto shortest_step = [](const TraceResult& r) {
+    double shortest = std::numeric_limits<double>::infinity();
+    for (std::size_t v = 0; v < r.num_traces(); ++v)
+      for (std::size_t i = 0; i < r.end[v]; ++i)
+        shortest = std::min(shortest, distance(r.sample(v, i), r.sample(v, i + 1)));
+    return shortest / r.parameters.step;
+  };
+  TraceOptions paper;
+  paper.min_step = 0.0;
+  const TraceResult a = trace_paths(box, *field, paper);
+  TraceOptions floor;
+  floor.min_step = 0.5;
+  const TraceResult b = trace_paths(box, *field, floor);
+  EXPECT_LT(shortest_step(a), 0.25);
+  EXPECT_GE(shortest_step(b), 0.5 * (1.0 - 1e-9));
+  EXPECT_LT(b.samples.size(), a.samples.size());
+  // Both end at the centre, the cube's one critical point.
+  for (const TraceResult* r : {&a, &b}) {
+    EXPECT_EQ(r->stops(StopReason::kCap), 0u);
+    for (std::size_t v = 0; v < r->num_traces(); ++v)
+      if (r->stop[v] == StopReason::kCritical) {
+        EXPECT_LT(norm(r->end_point(v)), 1.5 * voxel) << "vertex " << v;
+      }
+  }
+}
+
 TEST(TraceEstimate, APilotOfEveryVertexCountsTheSamplesExactly) {
   // 26 vertices: all are pilots, traced as trace_paths() traces them.
   const SurfaceMesh box = make_shape("box", 1);
@@ -168,6 +201,11 @@ TEST(Trace, OptionsAreValidated) {
   bad = {};
   bad.flux_threshold = 2;
   EXPECT_THROW(derive_trace_parameters(bad, 0.01, unit), InputError);
+  for (const double min_step : {-0.1, 1.5, std::nan("")}) {
+    bad = {};
+    bad.min_step = min_step;
+    EXPECT_THROW(derive_trace_parameters(bad, 0.01, unit), InputError) << min_step;
+  }
   const TraceParameters p = derive_trace_parameters(TraceOptions{}, 0.01, unit);
   EXPECT_DOUBLE_EQ(p.step, 0.005);
   EXPECT_DOUBLE_EQ(p.point_size, 0.01 * std::sqrt(3.0));
