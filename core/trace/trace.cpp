@@ -72,6 +72,8 @@ void trace_one(FieldProbe& probe, const Vec3d& p, bool planar, const TraceOption
   const double g0 = norm2(probe.gradient(p));
   const double critical = opt.critical * (g0 > 0.0 ? g0 : 1.0);
   Vec3d q = p, prev_g;
+  Vec3d paper_d;            // the last step's direction before min_step lengthened it
+  bool lengthened = false;  // whether min_step lengthened the last step
   double prev_flux = -1.0;
   for (int i = 0;; ++i) {
     const Vec3d g = probe.gradient(q);
@@ -80,6 +82,20 @@ void trace_one(FieldProbe& probe, const Vec3d& p, bool planar, const TraceOption
       return;
     }
     if (i > 0 && dot(g, prev_g) < 0.0) {
+      if (lengthened) {
+        // The lengthened step passed where the gradient turns (a critical point, or across a
+        // ridge the trace was following): the paper's step instead, so that traces settle on
+        // critical points and follow ridges as the paper's do.
+        t.samples.pop_back();
+        t.arc.pop_back();
+        q = t.samples.back();
+        const Vec3d next = q - paper_d * par.step;
+        t.arc.push_back(t.arc.back() + distance(next, q));
+        t.samples.push_back(next);
+        q = next;
+        lengthened = false;
+        continue;
+      }
       // The critical point was passed: end at the deeper of the last two samples.
       if (probe.phi(q) > probe.phi(t.samples[t.samples.size() - 2])) {
         t.samples.pop_back();
@@ -103,10 +119,11 @@ void trace_one(FieldProbe& probe, const Vec3d& p, bool planar, const TraceOption
       t.stop = StopReason::kCap;
       return;
     }
-    Vec3d d = step_direction(probe, q, g, par.step, opt.integrator);
-    const double d2 = norm2(d);
-    if (d2 > 0.0 && d2 < opt.min_step * opt.min_step) d = d * (opt.min_step / std::sqrt(d2));
-    const Vec3d next = q - d * par.step;
+    paper_d = step_direction(probe, q, g, par.step, opt.integrator);
+    const double d2 = norm2(paper_d);
+    lengthened = d2 > 0.0 && d2 < opt.min_step * opt.min_step;
+    const Vec3d next =
+        q - (lengthened ? paper_d * (opt.min_step / std::sqrt(d2)) : paper_d) * par.step;
     t.arc.push_back(t.arc.back() + distance(next, q));
     t.samples.push_back(next);
     prev_g = g;

@@ -4,7 +4,9 @@
 // Every surface vertex p is traced inward, q <- q - step * g with g = grad(phi)(q) normalised
 // only when |g| > 1 (eq. 1, 2, 4, 5), or with a higher-order integrator of the same field; where
 // |g| is smaller than `min_step` (beyond the paper, whose steps shrink with |g|: along a medial
-// ridge, where |g| ~ 0.1, traces would crawl at a tenth of a step), g is lengthened to it.
+// ridge, where |g| ~ 0.1, traces would crawl at a tenth of a step), g is lengthened to it, and
+// where such a step passes a turn of g the paper's step is taken instead, so that traces still
+// settle on critical points and follow ridges.
 // A trace stops at
 //   * a critical point: |g|^2 < c |g(p)|^2 (eq. 4), or g reversing direction (the point was
 //     passed);
