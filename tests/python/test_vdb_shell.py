@@ -247,6 +247,14 @@ def test_options_accept_numpy_scalars_and_none(sphere, sphere_shell):
     assert same_shell(r, sphere_shell)
 
 
+def test_min_step_reaches_the_trace(sphere):
+    paper = vdb_shell.build_shell(*sphere, resolution=RESOLUTION, min_step=0)
+    longer = vdb_shell.build_shell(*sphere, resolution=RESOLUTION, min_step=np.float64(1.0))
+    assert paper.report["trace"]["min_step"] == 0
+    assert longer.report["trace"]["min_step"] == 1
+    assert longer.report["trace"]["samples"] < paper.report["trace"]["samples"]
+
+
 def test_source_names_the_input(sphere):
     r = vdb_shell.build_shell(*sphere, resolution=RESOLUTION, source="ball")
     assert r.report["input"]["file"] == "ball"
