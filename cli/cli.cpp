@@ -44,6 +44,21 @@ const char* const kOutOfMemory =
     "out of memory: the system refused an allocation; set --max-memory to what this machine "
     "can spare (every stage checks its estimate against it) or lower --resolution";
 
+/// CLI11's NonNegativeNumber and PositiveNumber are ranges up to the largest double, which their
+/// messages print in full (309 digits): these say the bound.
+CLI::Validator lower_bound_check(bool strict) {
+  return CLI::Validator(
+      [strict](std::string& text) -> std::string {
+        double value = 0;
+        if (!CLI::detail::lexical_cast(text, value)) return "Value " + text + " is not a number";
+        const bool ok = strict ? value > 0 : value >= 0;
+        return ok ? std::string() : "Value " + text + (strict ? " must be > 0" : " must be >= 0");
+      },
+      strict ? "POSITIVE" : "NONNEGATIVE");
+}
+const CLI::Validator kNonNegative = lower_bound_check(false);
+const CLI::Validator kPositive = lower_bound_check(true);
+
 /// What the user said on the command line (defaults are the documented ones).
 struct CliOptions {
   std::vector<std::string> inputs;
@@ -535,7 +550,7 @@ void register_options(CLI::App& app, CliOptions& opt) {
   app.add_option("--repair-voxel-size", opt.shell.repair_voxel_size,
                  "--repair: the repair volume's voxel size, input units (0: the fields' voxel "
                  "size)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(kNonNegative)
       ->group(in);
   app.add_option("--repaired", opt.repaired,
                  "--repair: write the repaired surface (.obj .ply .off .stl)")
@@ -548,12 +563,12 @@ void register_options(CLI::App& app, CliOptions& opt) {
       ->group(fg);
   app.add_option("--voxel-size", opt.shell.fields.voxel_size,
                  "Voxel size in input units; overrides --resolution (0: use --resolution)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(kNonNegative)
       ->group(fg);
   app.add_option(
          "--max-memory", opt.shell.fields.max_memory_gb,
          "Memory budget, GiB: every stage estimates its peak first and refuses to start above it")
-      ->check(CLI::PositiveNumber)
+      ->check(kPositive)
       ->group(fg);
   app.add_option("--grids", opt.grids,
                  "Write the fields (surface, flux) and the traces (points) to this .vdb file")
@@ -590,11 +605,11 @@ void register_options(CLI::App& app, CliOptions& opt) {
   const char* th = "Thickness";
   app.add_option("--max-thickness", opt.shell.thickness.max_thickness,
                  "Largest thickness in input units, along the trace (0: as thick as possible)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(kNonNegative)
       ->group(th);
   app.add_option("--thickness-edge-factor", opt.shell.thickness.edge_factor,
                  "K: limit each vertex to K x its mean incident edge length (0: no limit)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(kNonNegative)
       ->group(th);
   app.add_option("--min-quality", opt.shell.validity.min_quality,
                  "Step inner vertices back from tets of a lower volume-length quality, where they "
@@ -670,11 +685,11 @@ void register_options(CLI::App& app, CliOptions& opt) {
       ->group(og);
 
   app.add_option("-j,--threads", opt.shell.threads, "Worker threads (0: all cores)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(kNonNegative)
       ->group("Performance");
   app.add_option("--timeout", opt.timeout,
                  "Give up on an input after this many seconds: exit 3, nothing written (0: none)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(kNonNegative)
       ->group("Performance");
 }
 
@@ -706,8 +721,13 @@ int run_cli_impl(int argc, const char* const* argv, std::ostream& out, std::ostr
     opt.repair_closing_given = app.count("--repair-closing") > 0;
     opt.repair_voxel_size_given = app.count("--repair-voxel-size") > 0;
   } catch (const CLI::ParseError& e) {
-    const int code = app.exit(e, out, err);
-    return code == 0 ? kExitOk : kExitBadInput;
+    if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success))
+      return app.exit(e, out, err) == 0 ? kExitOk : kExitBadInput;  // --help, --version
+    // One line, as every other bad input.
+    std::string what = e.what();
+    std::replace(what.begin(), what.end(), '\n', ' ');
+    err << "vdb_shell: error: " << what << " (vdb_shell --help lists the options)\n";
+    return kExitBadInput;
   }
 
   try {

@@ -61,6 +61,27 @@ TEST(Cli, BadInputIsOneLineAndExitCode2) {
   EXPECT_NE(r.err.find("open.obj"), std::string::npos) << r.err;
 }
 
+TEST(Cli, BadOptionValuesAreOneShortLineAndExitCode2) {
+  TempDir dir;
+  test::write_text(dir.file("tet.obj"), kTetObj);
+  const std::vector<std::vector<std::string>> cases = {{"--max-thickness", "-1"},
+                                                       {"--max-memory", "0"},
+                                                       {"--layers", "0"},
+                                                       {"--min-step", "2"},
+                                                       {"--no-such-option"}};
+  for (const auto& extra : cases) {
+    std::vector<std::string> args = {dir.file("tet.obj"), "-o", dir.file("s.vtu")};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const InProcess r = cli(args);
+    EXPECT_EQ(r.code, 2) << extra[0];
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_EQ(r.err.rfind("vdb_shell: error: ", 0), 0u) << r.err;
+    EXPECT_NE(r.err.find(extra[0]), std::string::npos) << r.err;
+    EXPECT_LT(r.err.size(), 160u) << r.err;  // no bound printed in 309 digits
+    EXPECT_FALSE(std::filesystem::exists(dir.file("s.vtu")));
+  }
+}
+
 TEST(Cli, HostileFilesExit2WithOneLineAndWriteNothing) {
   // Headers announcing more than the file holds, counts that are not counts, face lines that
   // end early, indices out of range, and every input the fuzz targets found: each is exit 2 with
