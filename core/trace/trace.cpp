@@ -75,6 +75,15 @@ void trace_one(FieldProbe& probe, const Vec3d& p, bool planar, const TraceOption
   Vec3d paper_d;            // the last step's direction before min_step lengthened it
   bool lengthened = false;  // whether min_step lengthened the last step
   double prev_flux = -1.0;
+  const auto step_to = [&](const Vec3d& next) {
+    t.arc.push_back(t.arc.back() + distance(next, q));
+    t.samples.push_back(next);
+    q = next;
+  };
+  const auto drop_last = [&] {
+    t.samples.pop_back();
+    t.arc.pop_back();
+  };
   for (int i = 0;; ++i) {
     const Vec3d g = probe.gradient(q);
     if (norm2(g) < critical) {
@@ -86,21 +95,14 @@ void trace_one(FieldProbe& probe, const Vec3d& p, bool planar, const TraceOption
         // The lengthened step passed where the gradient turns (a critical point, or across a
         // ridge the trace was following): the paper's step instead, so that traces settle on
         // critical points and follow ridges as the paper's do.
-        t.samples.pop_back();
-        t.arc.pop_back();
+        drop_last();
         q = t.samples.back();
-        const Vec3d next = q - paper_d * par.step;
-        t.arc.push_back(t.arc.back() + distance(next, q));
-        t.samples.push_back(next);
-        q = next;
+        step_to(q - paper_d * par.step);
         lengthened = false;
         continue;
       }
       // The critical point was passed: end at the deeper of the last two samples.
-      if (probe.phi(q) > probe.phi(t.samples[t.samples.size() - 2])) {
-        t.samples.pop_back();
-        t.arc.pop_back();
-      }
+      if (probe.phi(q) > probe.phi(t.samples[t.samples.size() - 2])) drop_last();
       t.stop = StopReason::kCritical;
       return;
     }
@@ -108,8 +110,7 @@ void trace_one(FieldProbe& probe, const Vec3d& p, bool planar, const TraceOption
       // Stop on the medial surface itself: at the peak of the flux once it exceeds rho.
       const double f = probe.flux(q);
       if (prev_flux > opt.flux_threshold && f <= prev_flux) {
-        t.samples.pop_back();
-        t.arc.pop_back();
+        drop_last();
         t.stop = StopReason::kFlux;
         return;
       }
@@ -122,12 +123,8 @@ void trace_one(FieldProbe& probe, const Vec3d& p, bool planar, const TraceOption
     paper_d = step_direction(probe, q, g, par.step, opt.integrator);
     const double d2 = norm2(paper_d);
     lengthened = d2 > 0.0 && d2 < opt.min_step * opt.min_step;
-    const Vec3d next =
-        q - (lengthened ? paper_d * (opt.min_step / std::sqrt(d2)) : paper_d) * par.step;
-    t.arc.push_back(t.arc.back() + distance(next, q));
-    t.samples.push_back(next);
     prev_g = g;
-    q = next;
+    step_to(q - (lengthened ? paper_d * (opt.min_step / std::sqrt(d2)) : paper_d) * par.step);
   }
 }
 

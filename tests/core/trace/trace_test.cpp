@@ -6,7 +6,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 
 #include "assets/shapes.h"
 #include "core/base/errors.h"
