@@ -211,6 +211,44 @@ class CellTable {
   std::vector<std::uint32_t> index_;
 };
 
+/// Ascending keys (i << 2 * kAxisBits | j << kAxisBits | k) as rows along k: the keys of a row
+/// (i, j) between two k.
+class KeyRows {
+ public:
+  KeyRows() = default;
+  explicit KeyRows(const std::vector<std::uint64_t>& keys) {
+    for (std::size_t c = 0; c < keys.size(); ++c)
+      if (c == 0 || (keys[c] >> kAxisBits) != (keys[c - 1] >> kAxisBits))
+        begin_.push_back(static_cast<std::uint32_t>(c));
+    begin_.push_back(static_cast<std::uint32_t>(keys.size()));
+    rows_ = CellTable(begin_.size() - 1);
+    for (std::size_t row = 0; row + 1 < begin_.size(); ++row)
+      rows_.insert(keys[begin_[row]] >> kAxisBits);
+    k_.resize(keys.size());
+    for (std::size_t c = 0; c < keys.size(); ++c)
+      k_[c] = static_cast<std::uint32_t>(keys[c] & (kAxisCells - 1));
+  }
+  /// The indices [first, last) of the keys (i, j, k) with k_lo <= k <= k_hi.
+  std::pair<std::uint32_t, std::uint32_t> find(std::int64_t i, std::int64_t j, std::int64_t k_lo,
+                                               std::int64_t k_hi) const {
+    if (i < 0 || j < 0 || i >= kAxisCells || j >= kAxisCells) return {0, 0};
+    const std::uint32_t row = rows_.find((std::uint64_t(i) << kAxisBits) | std::uint64_t(j));
+    if (row == CellTable::kNone) return {0, 0};
+    const std::uint32_t* end = k_.data() + begin_[row + 1];
+    const std::uint32_t* first = std::lower_bound(
+        k_.data() + begin_[row], end, static_cast<std::uint32_t>(std::max<std::int64_t>(k_lo, 0)));
+    const std::uint32_t* last = first;
+    while (last != end && std::int64_t(*last) <= k_hi) ++last;
+    return {static_cast<std::uint32_t>(first - k_.data()),
+            static_cast<std::uint32_t>(last - k_.data())};
+  }
+
+ private:
+  CellTable rows_;                    ///< (i, j) of a row -> row
+  std::vector<std::uint32_t> begin_;  ///< row r's keys: [begin_[r], begin_[r + 1])
+  std::vector<std::uint32_t> k_;      ///< per key: its k
+};
+
 /// The eligible samples of some traces in cubic cells, each cell's samples grouped by direction
 /// bin.
 class SampleGrid {
@@ -274,38 +312,38 @@ class SampleGrid {
         groups_[g].box.expand(r.samples[entries_[e].sample]);
     });
 
-    // Rows of cells along k: cells are sorted by (i, j, k), so a row is a run of them.
-    for (std::size_t c = 0; c < cell_keys.size(); ++c)
-      if (c == 0 || (cell_keys[c] >> kAxisBits) != (cell_keys[c - 1] >> kAxisBits))
-        row_begin_.push_back(static_cast<std::uint32_t>(c));
-    row_begin_.push_back(static_cast<std::uint32_t>(cell_keys.size()));
-    rows_ = CellTable(row_begin_.size() - 1);
-    for (std::size_t row = 0; row + 1 < row_begin_.size(); ++row)
-      rows_.insert(cell_keys[row_begin_[row]] >> kAxisBits);
-    cell_k_.resize(cell_keys.size());
-    for (std::size_t c = 0; c < cell_keys.size(); ++c)
-      cell_k_[c] = static_cast<std::uint32_t>(cell_keys[c] & (kAxisCells - 1));
+    cells_ = KeyRows(cell_keys);
     own_bins_.resize(cell_keys.size());
     for_each_index(cell_keys.size(), [&](std::size_t c) {
       for (std::uint32_t g = cell_groups_[c]; g < cell_groups_[c + 1]; ++g)
         own_bins_[c].set(groups_[g].bin);
     });
 
-    // Blocks of 2 x 2 x 2 cells: the bins of each block and of the 26 blocks around it.
-    blocks_ = CellTable(cell_keys.size());
-    std::vector<std::uint64_t> block_keys;
-    for (std::size_t c = 0; c < cell_keys.size(); ++c) {
+    // Blocks of 2 x 2 x 2 cells in (i, j, k) order, in rows along k like the cells: the bins of
+    // each block and of the 26 blocks around it.
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> cell_blocks(cell_keys.size());
+    for_each_index(cell_keys.size(), [&](std::size_t c) {
       const Cell cell = cell_of_key(cell_keys[c]);
-      const std::uint64_t key = key_of({cell.i / 2, cell.j / 2, cell.k / 2});
-      const std::uint32_t b = blocks_.insert(key);
-      if (b == block_bins_.size()) {
-        block_bins_.emplace_back();
-        block_keys.push_back(key);
+      cell_blocks[c] = {key_of({cell.i / 2, cell.j / 2, cell.k / 2}),
+                        static_cast<std::uint32_t>(c)};
+    });
+    parallel_sort(cell_blocks.begin(), cell_blocks.end());
+    std::vector<std::uint32_t> block_cells;  // block b's cells: [block_cells[b], [b + 1])
+    std::vector<std::uint64_t> block_keys;
+    for (std::size_t e = 0; e < cell_blocks.size(); ++e)
+      if (e == 0 || cell_blocks[e].first != cell_blocks[e - 1].first) {
+        block_cells.push_back(static_cast<std::uint32_t>(e));
+        block_keys.push_back(cell_blocks[e].first);
       }
-      block_bins_[b] |= own_bins_[c];
-    }
-    near_block_bins_.resize(blocks_.size());
-    for_each_index(blocks_.size(), [&](std::size_t b) {
+    block_cells.push_back(static_cast<std::uint32_t>(cell_blocks.size()));
+    blocks_ = KeyRows(block_keys);
+    block_bins_.resize(block_keys.size());
+    for_each_index(block_keys.size(), [&](std::size_t b) {
+      for (std::uint32_t e = block_cells[b]; e < block_cells[b + 1]; ++e)
+        block_bins_[b] |= own_bins_[cell_blocks[e].second];
+    });
+    near_block_bins_.resize(block_keys.size());
+    for_each_index(block_keys.size(), [&](std::size_t b) {
       near_block_bins_[b] = bins_around(cell_of_key(block_keys[b]));
     });
   }
@@ -344,9 +382,9 @@ class SampleGrid {
     const Cell block{half(c.i), half(c.j), half(c.k)};
     if (block == last.block) return last.bins;
     last.block = block;
-    const std::uint32_t b = in_grid(block) ? blocks_.find(key_of(block)) : CellTable::kNone;
     // A block without samples of its own has no precomputed answer.
-    last.bins = b != CellTable::kNone ? near_block_bins_[b] : bins_around(block);
+    const auto [first, end] = blocks_.find(block.i, block.j, block.k, block.k);
+    last.bins = first != end ? near_block_bins_[first] : bins_around(block);
     return last.bins;
   }
 
@@ -357,18 +395,10 @@ class SampleGrid {
                       const Visit& visit) const {
     const Cell lo = cell_of(p - Vec3d(radius, radius, radius));
     const Cell hi = cell_of(p + Vec3d(radius, radius, radius));
-    const std::int64_t k_lo = std::max<std::int64_t>(lo.k, 0);
-    const std::int64_t k_hi = std::min(hi.k, kAxisCells - 1);
-    for (std::int64_t i = std::max<std::int64_t>(lo.i, 0); i <= std::min(hi.i, kAxisCells - 1); ++i)
-      for (std::int64_t j = std::max<std::int64_t>(lo.j, 0); j <= std::min(hi.j, kAxisCells - 1);
-           ++j) {
-        const std::uint32_t row = rows_.find((std::uint64_t(i) << kAxisBits) | std::uint64_t(j));
-        if (row == CellTable::kNone) continue;
-        const std::uint32_t* first = cell_k_.data() + row_begin_[row];
-        const std::uint32_t* last = cell_k_.data() + row_begin_[row + 1];
-        for (const std::uint32_t* c = std::lower_bound(first, last, std::uint32_t(k_lo));
-             c != last && *c <= k_hi; ++c) {
-          const std::size_t id = static_cast<std::size_t>(c - cell_k_.data());
+    for (std::int64_t i = lo.i; i <= hi.i; ++i)
+      for (std::int64_t j = lo.j; j <= hi.j; ++j) {
+        const auto [first, last] = cells_.find(i, j, lo.k, hi.k);
+        for (std::uint32_t id = first; id < last; ++id) {
           if (!own_bins_[id].intersects(bins)) continue;
           for (std::uint32_t g = cell_groups_[id]; g < cell_groups_[id + 1]; ++g)
             if (bins.has(groups_[g].bin)) visit(groups_[g], groups_[g + 1].begin);
@@ -386,10 +416,6 @@ class SampleGrid {
     };
     return {axis(0), axis(1), axis(2)};
   }
-  static bool in_grid(const Cell& c) {
-    return c.i >= 0 && c.j >= 0 && c.k >= 0 && c.i < kAxisCells && c.j < kAxisCells &&
-           c.k < kAxisCells;
-  }
   static std::uint64_t key_of(const Cell& c) {
     return (std::uint64_t(c.i) << (2 * kAxisBits)) | (std::uint64_t(c.j) << kAxisBits) |
            std::uint64_t(c.k);
@@ -397,13 +423,11 @@ class SampleGrid {
   /// The bins of the blocks within one block of `block` (block coordinates).
   BinMask bins_around(const Cell& block) const {
     BinMask bins;
-    for (std::int64_t i = std::max<std::int64_t>(block.i - 1, 0); i <= block.i + 1; ++i)
-      for (std::int64_t j = std::max<std::int64_t>(block.j - 1, 0); j <= block.j + 1; ++j)
-        for (std::int64_t k = std::max<std::int64_t>(block.k - 1, 0); k <= block.k + 1; ++k) {
-          const std::uint32_t other =
-              in_grid({i, j, k}) ? blocks_.find(key_of({i, j, k})) : CellTable::kNone;
-          if (other != CellTable::kNone) bins |= block_bins_[other];
-        }
+    for (std::int64_t i = block.i - 1; i <= block.i + 1; ++i)
+      for (std::int64_t j = block.j - 1; j <= block.j + 1; ++j) {
+        const auto [first, last] = blocks_.find(i, j, block.k - 1, block.k + 1);
+        for (std::uint32_t b = first; b < last; ++b) bins |= block_bins_[b];
+      }
     return bins;
   }
   static Cell cell_of_key(std::uint64_t key) {
@@ -420,12 +444,10 @@ class SampleGrid {
   std::vector<Group> groups_;               ///< ascending (cell, bin); one more marks the end
   std::vector<std::uint32_t> cell_groups_;  ///< cell c's groups: [cell_groups_[c], [c + 1])
   std::vector<BinMask> own_bins_;           ///< per cell: the bins of its groups
-  CellTable rows_;                          ///< (i, j) of a row of cells along k -> row
-  std::vector<std::uint32_t> row_begin_;    ///< row r's cells: [row_begin_[r], row_begin_[r + 1])
-  std::vector<std::uint32_t> cell_k_;       ///< per cell: its k, ascending within a row
-  CellTable blocks_;                        ///< key of a block of 2 x 2 x 2 cells -> block
-  std::vector<BinMask> block_bins_;         ///< per block: the bins of its cells
-  std::vector<BinMask> near_block_bins_;    ///< per block: the bins of it and its 26 neighbours
+  KeyRows cells_;                           ///< the cells' keys in rows along k
+  KeyRows blocks_;  ///< the keys of the blocks of 2 x 2 x 2 cells (i / 2, j / 2, k / 2)
+  std::vector<BinMask> block_bins_;       ///< per block: the bins of its cells
+  std::vector<BinMask> near_block_bins_;  ///< per block: the bins of it and its 26 neighbours
 };
 
 /// The sample of trace j from its sample i on, within `ps` of arc past it, nearest to `target`
