@@ -270,6 +270,7 @@ TraceResult retrace_split(const TraceResult& traces, const SurfaceMesh& surface,
   r.planar = classify_vertices(surface, options.planar_angle);
   std::vector<OneTrace> rows(n);
   const std::unique_ptr<FieldProbe> probe = fields.probe();
+  OneTrace scratch;  // as in trace_paths()
   for (std::size_t u = 0; u < n; ++u) {
     OneTrace& t = rows[u];
     if (norm2(first_direction[u]) == 0) {  // the traced surface's own trace
@@ -281,10 +282,14 @@ TraceResult retrace_split(const TraceResult& traces, const SurfaceMesh& surface,
     }
     const Vec3d p = surface.points[u];
     trace_one(*probe, p + first_direction[u] * r.parameters.step, r.planar[u] != 0, options,
-              r.parameters, t);
-    t.samples.insert(t.samples.begin(), p);
-    for (double& a : t.arc) a += r.parameters.step;
-    t.arc.insert(t.arc.begin(), 0.0);
+              r.parameters, scratch);
+    t.samples.reserve(scratch.samples.size() + 1);
+    t.samples.push_back(p);
+    t.samples.insert(t.samples.end(), scratch.samples.begin(), scratch.samples.end());
+    t.arc.reserve(scratch.arc.size() + 1);
+    t.arc.push_back(0.0);
+    for (const double a : scratch.arc) t.arc.push_back(a + r.parameters.step);
+    t.stop = scratch.stop;
   }
   pack_traces(rows, r);
   for (std::size_t u = 0; u < n; ++u)
@@ -308,8 +313,14 @@ TraceResult trace_paths(const SurfaceMesh& mesh, const FieldSampler& fields,
   monitor.begin_part(0.0, 0.8, n);
   for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
     const std::unique_ptr<FieldProbe> probe = fields.probe();
+    // Traced in one reused row, then kept at their size: rows grown sample by sample would
+    // copy each trace several times and hold up to twice its samples.
+    OneTrace scratch;
     for (std::size_t v = begin; v < end; ++v) {
-      trace_one(*probe, mesh.points[v], r.planar[v] != 0, options, r.parameters, traces[v]);
+      trace_one(*probe, mesh.points[v], r.planar[v] != 0, options, r.parameters, scratch);
+      traces[v].samples.assign(scratch.samples.begin(), scratch.samples.end());
+      traces[v].arc.assign(scratch.arc.begin(), scratch.arc.end());
+      traces[v].stop = scratch.stop;
       monitor.advance();
     }
   });

@@ -98,13 +98,13 @@ struct TraceResult {
   }
 };
 
-/// Peak bytes per trace sample while trace_paths() runs: the samples being traced (a position
-/// and an arc length, 32 bytes, in rows that grow by doubling: at most 64) and their packed copy
-/// in the TraceResult (32). The merge grid built after the rows are freed takes less: 28 bytes
-/// per sample and ~13 for its groups and cells (measured 38-45 on fine meshes at 128 and 512).
-/// retrace_split() peaks at the same per sample: the traced result, the rows and their packed copy.
-/// Measured: 77-90 bytes per sample at the peak of the trace stage (fandisk, fertility, spot,
-/// sphere, torus, box at resolutions 64 to 512).
+/// Peak bytes per trace sample while trace_paths() or retrace_split() runs: the traced rows (a
+/// position and an arc length, 32 bytes, each row at its size) and their packed copy in the
+/// TraceResult (32); retrace_split() also holds the traces it starts from (32). The merge grid
+/// built after the rows are freed takes less: 28 bytes per sample and ~13 for its groups and cells
+/// (measured 38-45 on fine meshes at 128 and 512). With rows that grew by doubling, 77-90 bytes per
+/// sample were measured at the peak of the trace stage (fandisk, fertility, spot, sphere, torus,
+/// box at resolutions 64 to 512): an upper bound of today's.
 inline constexpr std::size_t kTraceBytesPerSample = 96;
 /// Peak bytes per trace besides its samples: its row, the packed per-trace arrays, the
 /// classification's face normals (transient) and the merge phase's lists.
