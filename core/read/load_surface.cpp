@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "core/base/errors.h"
+#include "core/read/format_reader.h"
 #include "core/validity/shell_checks.h"
 
 namespace vdb_shell {
@@ -282,6 +283,31 @@ void check_crossings(const SoupFaces& faces, ProblemCollector& crossing) {
                            " cross at " + faces.point_name(triangles_crossing_point(mesh, f, g)));
 }
 
+/// `soup` with the points at exactly one position made one (the first), and how many vertices
+/// its polygons use that are gone in it (0, with an empty soup, when it has no such points or an
+/// index out of range).
+PolygonSoup weld_positions(const PolygonSoup& soup, std::size_t& welded) {
+  welded = 0;
+  PolygonSoup out;
+  std::vector<std::int64_t> index(soup.points.size());
+  read_detail::PositionWelder weld(out.points);
+  for (std::size_t i = 0; i < soup.points.size(); ++i) index[i] = weld.index(soup.points[i]);
+  if (out.points.size() == soup.points.size()) return {};
+  const std::int64_t n = static_cast<std::int64_t>(soup.points.size());
+  std::vector<char> used(soup.points.size()), used_after(out.points.size());
+  out.polygons = soup.polygons;
+  for (auto& poly : out.polygons)
+    for (std::int64_t& v : poly) {
+      if (v < 0 || v >= n) return {};
+      used[static_cast<std::size_t>(v)] = 1;
+      v = index[static_cast<std::size_t>(v)];
+      used_after[static_cast<std::size_t>(v)] = 1;
+    }
+  welded = static_cast<std::size_t>(std::count(used.begin(), used.end(), 1) -
+                                    std::count(used_after.begin(), used_after.end(), 1));
+  return out;
+}
+
 }  // namespace
 
 std::vector<SurfaceProblem> find_surface_problems(const PolygonSoup& soup,
@@ -370,9 +396,18 @@ SurfaceStats surface_stats(const SurfaceMesh& mesh) {
   return s;
 }
 
-LoadedSurface make_surface(const PolygonSoup& soup, const std::string& source,
+LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
                            const ValidationOptions& options) {
-  const std::vector<SurfaceProblem> problems = find_surface_problems(soup, options);
+  std::vector<SurfaceProblem> problems = find_surface_problems(input, options);
+  // Seams: a surface written with vertices repeated along its UV or normal seams is closed once
+  // the repeats at exactly one position are one vertex. Tried only on a surface that fails as it
+  // is (the parts of a valid surface that touch keep their own vertices), kept only if it passes.
+  std::size_t welded_vertices = 0;
+  PolygonSoup welded;
+  if (!problems.empty()) {
+    welded = weld_positions(input, welded_vertices);
+    if (welded_vertices > 0 && find_surface_problems(welded, options).empty()) problems.clear();
+  }
   if (!problems.empty()) {
     std::string msg = source + ": not a closed 2-manifold triangle surface: ";
     for (std::size_t i = 0; i < problems.size(); ++i) {
@@ -383,8 +418,10 @@ LoadedSurface make_surface(const PolygonSoup& soup, const std::string& source,
     throw InputError(msg);
   }
 
+  const PolygonSoup& soup = welded_vertices > 0 ? welded : input;
   LoadedSurface out;
   out.source = source;
+  out.welded_vertices = welded_vertices;
   out.polygons_read = soup.polygons.size();
   for (const auto& poly : soup.polygons)
     if (poly.size() > 3) ++out.triangulated_polygons;
@@ -411,6 +448,10 @@ LoadedSurface make_surface(const PolygonSoup& soup, const std::string& source,
         "the surface was oriented inward (negative enclosed volume); all faces "
         "were flipped to point outward");
   }
+  if (out.welded_vertices)
+    out.notices.push_back(std::to_string(out.welded_vertices) +
+                          " vertices at the position of an earlier vertex (seams written twice) "
+                          "were welded to it: welded, the surface is closed");
   if (out.triangulated_polygons)
     out.notices.push_back(std::to_string(out.triangulated_polygons) +
                           " polygons with more than three corners were split into triangles");

@@ -5,8 +5,10 @@
 // polygons with fewer than three corners, degenerate (zero-area) and duplicate faces, boundary
 // edges, non-manifold edges and vertices, inconsistent orientation, and (on a surface that
 // passes all of those) faces that cross each other. Several components are
-// allowed. A surface whose enclosed volume is negative (normals pointing in) is flipped and a
-// notice says so. Vertices no face uses are dropped with a notice. The geometric rules (areas,
+// allowed. A surface that breaks a rule only because vertices are written twice at one position
+// (seams) is taken with those welded, and a notice says so. A surface whose enclosed volume is
+// negative (normals pointing in) is flipped and a notice says so. Vertices no face uses are
+// dropped with a notice. The geometric rules (areas,
 // crossings, orientation) are judged on the points scaled by a power of two to unit magnitude,
 // exactly, so the verdicts do not depend on the input's unit; messages name the input's points.
 #pragma once
@@ -48,6 +50,9 @@ struct LoadedSurface {
   std::size_t polygons_read = 0;          ///< faces in the file before triangulation
   std::size_t triangulated_polygons = 0;  ///< polygons with more than three corners
   std::size_t dropped_unused_vertices = 0;
+  /// Vertices at exactly the position of an earlier one, welded to it: seams written twice
+  /// (make_surface() welds them only when that makes a valid surface of an invalid one).
+  std::size_t welded_vertices = 0;
   bool flipped = false;              ///< true when the input was oriented inward
   std::vector<std::string> notices;  ///< one sentence each, for the CLI to print
 };

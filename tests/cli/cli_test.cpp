@@ -255,6 +255,41 @@ TEST(CliRepair, ACleanInputIsKeptAndGivesThePlainShell) {
   EXPECT_EQ(repair["faces"], 408);
 }
 
+TEST(CliRepair, SeamsWrittenTwiceAreWeldedNotRebuilt) {
+  // The horn with every triangle's corners written apart, as an exporter splitting vertices
+  // along seams writes them: welded with a notice, with or without --repair, and the shell is
+  // built on the file's own triangles (checked here against the surface read back).
+  TempDir dir;
+  const SurfaceMesh horn = make_shape("horn");
+  SurfaceMesh apart;
+  for (const Triangle& t : horn.triangles) {
+    Triangle u;
+    for (int c = 0; c < 3; ++c) {
+      apart.points.push_back(horn.points[t[std::size_t(c)]]);
+      u[std::size_t(c)] = static_cast<std::uint32_t>(apart.points.size() - 1);
+    }
+    apart.triangles.push_back(u);
+  }
+  const std::string in = dir.file("apart.obj");
+  write_surface(in, apart);
+  const LoadedSurface welded = load_surface(in);
+  EXPECT_EQ(welded.mesh.points.size(), horn.points.size());
+  EXPECT_EQ(welded.welded_vertices, apart.points.size() - horn.points.size());
+
+  const InProcess r = cli({in, "-r", "48", "-o", dir.file("shell.ele")});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("(seams written twice) were welded"), std::string::npos) << r.err;
+  EXPECT_EQ(
+      test::independent_shell_problems(welded.mesh, test::read_tetgen_shell(dir.file("shell.ele"))),
+      "");
+  const InProcess repaired = cli(
+      {in, "-r", "48", "--repair", "-o", dir.file("repaired.ele"), "--report", dir.file("r.json")});
+  ASSERT_EQ(repaired.code, 0) << repaired.err;
+  EXPECT_NE(repaired.err.find("--repair kept it as it is"), std::string::npos) << repaired.err;
+  EXPECT_EQ(nlohmann::json::parse(test::read_text(dir.file("r.json")))["repair"]["method"], "kept");
+  EXPECT_EQ(test::read_text(dir.file("shell.ele")), test::read_text(dir.file("repaired.ele")));
+}
+
 TEST(CliBatch, OneGoodOneBadInputExit2AndOneLineEach) {
   TempDir dir;
   test::write_text(dir.file("tet.obj"), kTetObj);

@@ -5,9 +5,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include "core/base/errors.h"
 #include "core/read/load_surface.h"
@@ -253,6 +255,89 @@ TEST(Validate, InwardSurfaceIsFlippedWithNotice) {
   ASSERT_EQ(s.notices.size(), 1u);
   EXPECT_TRUE(contains(s.notices[0], "flipped"));
   EXPECT_NEAR(s.stats.enclosed_volume, 1.0 / 6.0, 1e-12);
+}
+
+/// The cube with every face's corners written apart (a file with seams everywhere: each corner
+/// stored once per face, as exporters split vertices along UV or normal seams).
+PolygonSoup cube_written_apart() {
+  const double corner[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+                               {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+  PolygonSoup soup;
+  for (const char* f : kCubeFaces) {
+    int a, b, c;
+    std::sscanf(f, "f %d %d %d", &a, &b, &c);
+    std::vector<std::int64_t> face;
+    for (const int v : {a, b, c}) {
+      soup.points.push_back({corner[v - 1][0], corner[v - 1][1], corner[v - 1][2]});
+      face.push_back(std::int64_t(soup.points.size()) - 1);
+    }
+    soup.polygons.push_back(face);
+  }
+  return soup;
+}
+
+TEST(Validate, SeamsWrittenTwiceAreWeldedWithNotice) {
+  const PolygonSoup apart = cube_written_apart();
+  ASSERT_EQ(apart.points.size(), 36u);
+  // As written: every edge is a boundary edge.
+  const std::vector<SurfaceProblem> problems = find_surface_problems(apart);
+  ASSERT_FALSE(problems.empty());
+  EXPECT_TRUE(contains(problems[0].rule, "boundary edges"));
+
+  const LoadedSurface s = make_surface(apart, "apart");
+  EXPECT_EQ(s.welded_vertices, 28u);  // 36 corners written, 8 distinct
+  EXPECT_EQ(s.mesh.points.size(), 8u);
+  ASSERT_EQ(s.mesh.triangles.size(), 12u);
+  EXPECT_EQ(s.stats.genus, 0);
+  EXPECT_NEAR(s.stats.enclosed_volume, 1.0, 1e-12);
+  ASSERT_FALSE(s.notices.empty());
+  EXPECT_TRUE(contains(s.notices[0], "28 vertices")) << s.notices[0];
+  EXPECT_TRUE(contains(s.notices[0], "seams")) << s.notices[0];
+  // The triangles are the file's, corner for corner (by position), in the file's order.
+  for (std::size_t f = 0; f < 12; ++f)
+    for (int c = 0; c < 3; ++c) {
+      const Vec3d& p = s.mesh.points[s.mesh.triangles[f][std::size_t(c)]];
+      const Vec3d& q = apart.points[std::size_t(apart.polygons[f][std::size_t(c)])];
+      EXPECT_TRUE(p == q) << f << " " << c;
+    }
+
+  // Through a file, with --repair's "kept" path in mind: the same surface.
+  TempDir dir;
+  std::string text;
+  for (const Vec3d& p : apart.points)
+    text +=
+        "v " + std::to_string(p.x) + " " + std::to_string(p.y) + " " + std::to_string(p.z) + "\n";
+  for (int f = 0; f < 12; ++f)
+    text += "f " + std::to_string(3 * f + 1) + " " + std::to_string(3 * f + 2) + " " +
+            std::to_string(3 * f + 3) + "\n";
+  write_text(dir.file("apart.obj"), text);
+  EXPECT_EQ(load_surface(dir.file("apart.obj")).welded_vertices, 28u);
+}
+
+TEST(Validate, WeldingIsNotAFixForOtherProblems) {
+  // Seams and a hole: still refused, with the problems as written.
+  PolygonSoup holed = cube_written_apart();
+  holed.polygons.pop_back();
+  try {
+    make_surface(holed, "holed");
+    ADD_FAILURE() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_TRUE(contains(e.what(), "33 boundary edges")) << e.what();  // 3 * 11 as written
+  }
+  // Two tets touching at one corner, each with its own vertex there: valid as written, and kept
+  // apart (welded, the corner would be non-manifold).
+  PolygonSoup touching;
+  touching.points = {{0, 0, 0}, {1, 0, 0},  {0, 1, 0},  {0, 0, 1},
+                     {0, 0, 0}, {-1, 0, 0}, {0, -1, 0}, {0, 0, -1}};
+  touching.polygons = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {2, 0, 3},
+                       {4, 5, 6}, {4, 7, 5}, {5, 7, 6}, {6, 7, 4}};
+  const LoadedSurface kept = make_surface(touching, "touching");
+  EXPECT_EQ(kept.welded_vertices, 0u);
+  EXPECT_EQ(kept.mesh.points.size(), 8u);
+  EXPECT_EQ(kept.stats.components, 2u);
+  // The same with a hole in one tet: welding the shared corner does not make it valid either.
+  touching.polygons.pop_back();
+  EXPECT_THROW(make_surface(touching, "touching, holed"), InputError);
 }
 
 TEST(Validate, SeveralComponentsAndQuadsAreAllowed) {
