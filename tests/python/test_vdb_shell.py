@@ -161,6 +161,23 @@ def test_inward_surface_is_flipped(sphere):
     assert np.all(tet_volumes(r.points, r.tets) > 0)
 
 
+def test_seams_written_twice_are_welded(sphere):
+    # Every triangle with corners of its own, as exporters split vertices along seams.
+    v, f = sphere
+    apart_v = v[f.reshape(-1)]
+    apart_f = np.arange(len(apart_v)).reshape(-1, 3)
+    r = vdb_shell.build_shell(apart_v, apart_f, resolution=RESOLUTION)
+    assert any("welded" in n for n in r.notices), r.notices
+    assert r.report["input"]["vertices"] == len(v)
+    # A shell of the given triangles, their corners welded and numbered in order of first
+    # appearance.
+    _, first, inverse = np.unique(apart_v, axis=0, return_index=True, return_inverse=True)
+    order = np.argsort(first)
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))
+    check_shell(apart_v[first[order]], rank[inverse.reshape(-1)].reshape(-1, 3), r)
+
+
 def test_result_arrays_are_read_only(sphere_shell):
     with pytest.raises(ValueError):
         sphere_shell.points[0, 0] = 1.0
