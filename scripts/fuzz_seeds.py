@@ -1,7 +1,9 @@
 #!/usr/bin/env python3
-"""Writes fuzz seeds for scripts/fuzz.sh: every .obj under SEEDS/obj converted to PLY (binary
-and ASCII), STL (binary and ASCII) and OFF; a tetrahedron in the variants meshio does not write
-(binary OFF, PLY triangle strips, big-endian PLY, 4OFF); and the shared meshes under 64 kB.
+"""Writes fuzz seeds for scripts/fuzz.sh: a tetrahedron with its corners written per face (seams
+stored twice, which validation welds) into SEEDS/obj; every .obj under SEEDS/obj converted to PLY
+(binary and ASCII), STL (binary and ASCII) and OFF; the tetrahedron in the variants meshio does
+not write (binary OFF, PLY triangle strips, big-endian PLY, 4OFF); and the shared meshes under
+64 kB.
 Usage: fuzz_seeds.py SEEDS SHARED_MESHES"""
 import glob
 import os
@@ -12,6 +14,11 @@ import sys
 import meshio
 
 seeds, shared = sys.argv[1], sys.argv[2]
+corners = [(0, 0, 0), (2, 0, 0), (0, 2, 0), (0, 0, 2)]
+faces = [(0, 2, 1), (0, 1, 3), (1, 2, 3), (2, 0, 3)]
+with open(os.path.join(seeds, "obj", "tet_apart.obj"), "w") as f:
+    f.write("".join("v %g %g %g\n" % corners[v] for t in faces for v in t))
+    f.write("".join("f %d %d %d\n" % (3 * k + 1, 3 * k + 2, 3 * k + 3) for k in range(4)))
 for path in sorted(glob.glob(os.path.join(seeds, "obj", "*.obj"))):
     name = os.path.splitext(os.path.basename(path))[0]
     mesh = meshio.read(path)
@@ -21,8 +28,6 @@ for path in sorted(glob.glob(os.path.join(seeds, "obj", "*.obj"))):
     meshio.write(os.path.join(seeds, "stl", name + "_ascii.stl"), mesh, binary=False)
     meshio.write(os.path.join(seeds, "off", name + ".off"), mesh)
 
-corners = [(0, 0, 0), (2, 0, 0), (0, 2, 0), (0, 0, 2)]
-faces = [(0, 2, 1), (0, 1, 3), (1, 2, 3), (2, 0, 3)]
 with open(os.path.join(seeds, "off", "tet_binary.off"), "wb") as f:
     f.write(b"OFF BINARY\n" + struct.pack(">3i", 4, 4, 6))
     for c in corners:
