@@ -402,11 +402,11 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
   // Seams: a surface written with vertices repeated along its UV or normal seams is closed once
   // the repeats at exactly one position are one vertex. Tried only on a surface that fails as it
   // is (the parts of a valid surface that touch keep their own vertices), kept only if it passes.
-  std::size_t welded_vertices = 0;
+  std::size_t seam_vertices = 0;
   PolygonSoup welded;
   if (!problems.empty()) {
-    welded = weld_positions(input, welded_vertices);
-    if (welded_vertices > 0 && find_surface_problems(welded, options).empty()) problems.clear();
+    welded = weld_positions(input, seam_vertices);
+    if (seam_vertices > 0 && find_surface_problems(welded, options).empty()) problems.clear();
   }
   if (!problems.empty()) {
     std::string msg = source + ": not a closed 2-manifold triangle surface: ";
@@ -418,10 +418,10 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
     throw InputError(msg);
   }
 
-  const PolygonSoup& soup = welded_vertices > 0 ? welded : input;
+  const PolygonSoup& soup = seam_vertices > 0 ? welded : input;
   LoadedSurface out;
   out.source = source;
-  out.welded_vertices = welded_vertices;
+  out.seam_vertices = seam_vertices;
   out.polygons_read = soup.polygons.size();
   for (const auto& poly : soup.polygons)
     if (poly.size() > 3) ++out.triangulated_polygons;
@@ -448,8 +448,8 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
         "the surface was oriented inward (negative enclosed volume); all faces "
         "were flipped to point outward");
   }
-  if (out.welded_vertices)
-    out.notices.push_back(std::to_string(out.welded_vertices) +
+  if (out.seam_vertices)
+    out.notices.push_back(std::to_string(out.seam_vertices) +
                           " vertices at the position of an earlier vertex (seams written twice) "
                           "were welded to it: welded, the surface is closed");
   if (out.triangulated_polygons)

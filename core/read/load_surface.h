@@ -52,7 +52,7 @@ struct LoadedSurface {
   std::size_t dropped_unused_vertices = 0;
   /// Vertices at exactly the position of an earlier one, welded to it: seams written twice
   /// (make_surface() welds them only when that makes a valid surface of an invalid one).
-  std::size_t welded_vertices = 0;
+  std::size_t seam_vertices = 0;
   bool flipped = false;              ///< true when the input was oriented inward
   std::vector<std::string> notices;  ///< one sentence each, for the CLI to print
 };

@@ -274,7 +274,7 @@ TEST(CliRepair, SeamsWrittenTwiceAreWeldedNotRebuilt) {
   write_surface(in, apart);
   const LoadedSurface welded = load_surface(in);
   EXPECT_EQ(welded.mesh.points.size(), horn.points.size());
-  EXPECT_EQ(welded.welded_vertices, apart.points.size() - horn.points.size());
+  EXPECT_EQ(welded.seam_vertices, apart.points.size() - horn.points.size());
 
   const InProcess r = cli({in, "-r", "48", "-o", dir.file("shell.ele")});
   ASSERT_EQ(r.code, 0) << r.err;

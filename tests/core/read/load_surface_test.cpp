@@ -285,7 +285,7 @@ TEST(Validate, SeamsWrittenTwiceAreWeldedWithNotice) {
   EXPECT_TRUE(contains(problems[0].rule, "boundary edges"));
 
   const LoadedSurface s = make_surface(apart, "apart");
-  EXPECT_EQ(s.welded_vertices, 28u);  // 36 corners written, 8 distinct
+  EXPECT_EQ(s.seam_vertices, 28u);  // 36 corners written, 8 distinct
   EXPECT_EQ(s.mesh.points.size(), 8u);
   ASSERT_EQ(s.mesh.triangles.size(), 12u);
   EXPECT_EQ(s.stats.genus, 0);
@@ -311,7 +311,7 @@ TEST(Validate, SeamsWrittenTwiceAreWeldedWithNotice) {
     text += "f " + std::to_string(3 * f + 1) + " " + std::to_string(3 * f + 2) + " " +
             std::to_string(3 * f + 3) + "\n";
   write_text(dir.file("apart.obj"), text);
-  EXPECT_EQ(load_surface(dir.file("apart.obj")).welded_vertices, 28u);
+  EXPECT_EQ(load_surface(dir.file("apart.obj")).seam_vertices, 28u);
 }
 
 TEST(Validate, WeldingIsNotAFixForOtherProblems) {
@@ -332,7 +332,7 @@ TEST(Validate, WeldingIsNotAFixForOtherProblems) {
   touching.polygons = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {2, 0, 3},
                        {4, 5, 6}, {4, 7, 5}, {5, 7, 6}, {6, 7, 4}};
   const LoadedSurface kept = make_surface(touching, "touching");
-  EXPECT_EQ(kept.welded_vertices, 0u);
+  EXPECT_EQ(kept.seam_vertices, 0u);
   EXPECT_EQ(kept.mesh.points.size(), 8u);
   EXPECT_EQ(kept.stats.components, 2u);
   // The same with a hole in one tet: welding the shared corner does not make it valid either.
