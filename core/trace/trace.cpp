@@ -313,14 +313,12 @@ TraceResult trace_paths(const SurfaceMesh& mesh, const FieldSampler& fields,
   monitor.begin_part(0.0, 0.8, n);
   for_each_chunk(n, [&](std::size_t begin, std::size_t end) {
     const std::unique_ptr<FieldProbe> probe = fields.probe();
-    // Traced in one reused row, then kept at their size: rows grown sample by sample would
+    // Traced in one reused row, then copied at their size: rows grown sample by sample would
     // copy each trace several times and hold up to twice its samples.
     OneTrace scratch;
     for (std::size_t v = begin; v < end; ++v) {
       trace_one(*probe, mesh.points[v], r.planar[v] != 0, options, r.parameters, scratch);
-      traces[v].samples.assign(scratch.samples.begin(), scratch.samples.end());
-      traces[v].arc.assign(scratch.arc.begin(), scratch.arc.end());
-      traces[v].stop = scratch.stop;
+      traces[v] = scratch;
       monitor.advance();
     }
   });
