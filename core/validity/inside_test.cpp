@@ -20,10 +20,9 @@ struct Ray {
 
 enum class RayHit { kMiss, kCross, kGraze };
 
-// How `ray` meets triangle (a, b, c), whose box is [lo, hi]: it crosses the triangle's interior,
-// misses it, or grazes it (passes within eps of an edge, or meets it seen edge-on).
-RayHit ray_meets(const Ray& ray, const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& lo,
-                 const Vec3d& hi) {
+// How `ray` meets triangle (a, b, c): it crosses the triangle's interior, misses it, or grazes
+// it (passes within eps of an edge, which covers meeting it seen edge-on).
+RayHit ray_meets(const Ray& ray, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
   const int u = ray.u, v = ray.v;
   const double eps = ray.eps, pu = ray.p[u], pv = ray.p[v];
   // Signed distances (2D) of the projected point from the projected edges, positive inside.
@@ -35,10 +34,19 @@ RayHit ray_meets(const Ray& ray, const Vec3d& a, const Vec3d& b, const Vec3d& c,
   const double l_bc = length(cu - bu, cv - bv), l_ca = length(au - cu, av - cv),
                l_ab = length(bu - au, bv - av);
   const double l_max = std::max({l_bc, l_ca, l_ab});
-  if (std::abs(d) <= eps * l_max) {  // seen edge-on: the ray may graze it
-    const bool near =
-        pu >= lo[u] - eps && pu <= hi[u] + eps && pv >= lo[v] - eps && pv <= hi[v] + eps;
-    return near ? RayHit::kGraze : RayHit::kMiss;
+  if (std::abs(d) <= eps * l_max) {
+    // Seen edge-on: the projection is no wider than eps (d / l_max), so the ray meets the
+    // triangle only if it passes within eps of a projected edge; it grazes it then.
+    const auto to_edge2 = [&](double xu, double xv, double yu, double yv) {
+      const double eu = yu - xu, ev = yv - xv, e2 = eu * eu + ev * ev;
+      const double t =
+          e2 > 0.0 ? std::clamp(((pu - xu) * eu + (pv - xv) * ev) / e2, 0.0, 1.0) : 0.0;
+      const double du = pu - xu - t * eu, dv = pv - xv - t * ev;
+      return du * du + dv * dv;
+    };
+    const double near2 =
+        std::min({to_edge2(au, av, bu, bv), to_edge2(bu, bv, cu, cv), to_edge2(cu, cv, au, av)});
+    return near2 <= eps * eps ? RayHit::kGraze : RayHit::kMiss;
   }
   const double s = d > 0.0 ? 1.0 : -1.0;
   const double w0 = (cu - bu) * (pv - bv) - (cv - bv) * (pu - bu);
@@ -103,7 +111,9 @@ bool InsideTester::outside(const Vec3d& p) const {
   double winding = 0.0;
   for (const Triangle& t : surface_.triangles)
     winding += solid_angle(p, surface_.points[t[0]], surface_.points[t[1]], surface_.points[t[2]]);
-  return std::abs(winding) < 2.0 * kPi;  // |winding number| < 1/2
+  // The winding number's parity, as the rays' (it is 0 or 1 on an outward surface; 2 inside
+  // two nested components facing the same way, which is outside by parity).
+  return std::llround(winding / (4.0 * kPi)) % 2 == 0;
 }
 
 void InsideTester::build(int axis) {
@@ -177,7 +187,7 @@ InsideTester::RayVerdict InsideTester::cast_ray(int axis, const Vec3d& p) const 
         p.z >= lo.z - eps && p.z <= hi.z + eps && point_triangle_distance2(p, a, b, c) <= eps * eps)
       return RayVerdict::kOnSurface;
     if (ambiguous) continue;  // only an on-surface hit can still decide
-    switch (ray_meets(ray, a, b, c, lo, hi)) {
+    switch (ray_meets(ray, a, b, c)) {
       case RayHit::kCross:
         ++crossings;
         break;

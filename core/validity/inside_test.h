@@ -3,13 +3,14 @@
 //
 // Method: the parity of the crossings of an axis-parallel ray, its triangles found in a 2D grid
 // of the triangles' projections (one grid per axis). A ray that passes within the tolerance of a
-// triangle's edge, or meets a triangle seen edge-on, is ambiguous and the next axis is tried.
+// triangle's edge (a triangle seen edge-on included) is ambiguous and the next axis is tried.
 // When all three are (the point lines up with edges on every axis, as inner points do on a mesh
 // of axis-aligned faces), the same rays are cast from a few points near it, off those lines, no
 // farther than its clearance from the surface: each lies on its side. Only when those are
-// ambiguous too does the generalized winding number over all triangles decide. Points within
-// the tolerance of a triangle (exact point-triangle distance) are on the surface, hence not
-// outside.
+// ambiguous too does the generalized winding number over all triangles decide, by its parity.
+// Points within the tolerance of a triangle (exact point-triangle distance) are on the surface,
+// hence not outside. Parity makes the orientation irrelevant: inside two nested components
+// facing the same way is outside.
 //
 // Internal to core/validity (not installed); point_outside_surface() (shell_checks.h) is the
 // public one-point call.
@@ -26,7 +27,8 @@ namespace vdb_shell {
 
 class InsideTester {
  public:
-  /// Indexes `surface`, which must be closed and outward oriented, and outlive the tester.
+  /// Indexes `surface`, which must be closed (in any orientation: inside is by parity) and
+  /// outlive the tester.
   /// \param tolerance  world units: points closer than this to the surface are on it.
   InsideTester(const SurfaceMesh& surface, double tolerance);
 

@@ -201,6 +201,24 @@ TEST(ShellChecks, PointInSphereAgreesWithRadius) {
   EXPECT_TRUE(point_outside_surface(s, {0, 0, 0.6}, 1e-9));
 }
 
+TEST(ShellChecks, InsideIsByParityAlsoInsideTwoComponentsFacingTheSameWay) {
+  // A box in a box, both facing out, as the loader meets them before it orients them: a point in
+  // the inner one is outside by parity (two crossings on every ray; winding number 2), in
+  // between inside. Points on the boxes' lattice lines have their rays along edges.
+  const SurfaceMesh outer = make_shape("box", 5);
+  SurfaceMesh s = outer;
+  const std::uint32_t n = static_cast<std::uint32_t>(outer.points.size());
+  for (const Vec3d& p : outer.points) s.points.push_back(p * 0.5);
+  for (const Triangle& t : outer.triangles) s.triangles.push_back({t[0] + n, t[1] + n, t[2] + n});
+  for (const double x : {-0.2, 0.0, 0.2})
+    for (const double y : {-0.2, 0.0, 0.2})
+      for (const double z : {-0.2, 0.0, 0.2}) {
+        EXPECT_TRUE(point_outside_surface(s, {x, y, z}, 1e-9)) << x << " " << y << " " << z;
+        EXPECT_FALSE(point_outside_surface(s, {2 * x + 0.05, 2 * y + 0.05, 0.4}, 1e-9))
+            << x << " " << y;
+      }
+}
+
 TEST(ShellChecks, PointsInLineWithEdgesOnEveryAxisAreJudgedFromPointsNearThem) {
   // The box at detail 5 has its vertices on a lattice of step 0.1. A point on lattice lines in
   // two coordinates and 0.004 from a face in the third has every axis ray running along edges,
