@@ -317,7 +317,10 @@ std::string report_html(const ShellResult& r, const ReportFiles& files, double r
                                num(box.hi.z) + "), diagonal " + num(box.diagonal()));
   h << row("mean edge length", num(st.mean_edge_length));
   h << row("enclosed volume", num(st.enclosed_volume));
-  h << row("oriented", in.flipped ? "inward in the file: flipped" : "outward");
+  h << row("oriented", in.flipped              ? "inward in the file: flipped"
+                       : in.flipped_components ? count_of(in.flipped_components) +
+                                                     " components inward in the file: flipped"
+                                               : "outward");
   if (r.repair) {
     const RepairReport& p = *r.repair;
     if (p.kept)

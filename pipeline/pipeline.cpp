@@ -230,7 +230,7 @@ ShellResult run(const LoadedSurface& surface, const ShellOptions& options,
                           ", " + count(mesh.triangles.size(), "faces") + ", with the run's copy)",
                       "give a surface with fewer faces or raise --max-memory");
   r.options = options;
-  r.input = {surface.source, surface.stats, surface.flipped};
+  r.input = {surface.source, surface.stats, surface.flipped, surface.flipped_components};
   r.surface = mesh;
   r.notices = surface.notices;
 
@@ -502,7 +502,7 @@ ShellResult build_shell(const LoadedSurface& surface, const ShellOptions& option
       in_arena(options.threads, [&] { return run(scaled, scaled_options(options, k), control); });
   scale_result(r, -k);
   r.options = options;
-  r.input = {surface.source, surface.stats, surface.flipped};
+  r.input = {surface.source, surface.stats, surface.flipped, surface.flipped_components};
   r.surface = surface.mesh;
   r.notices.push_back("the voxel size " + text(h) + why + limit + ": the shell was built at 2^" +
                       std::to_string(k) + " times the surface's size and scaled back exactly");
@@ -564,10 +564,10 @@ std::string report_json(const ShellResult& r, const ReportFiles& files, double r
   nlohmann::ordered_json j;
   const SurfaceStats& in = r.input.stats;
   const FieldStats& fs = r.field_stats;
-  j["input"] = {{"file", r.input.source},    {"vertices", in.vertices},
-                {"faces", in.faces},         {"components", in.components},
-                {"genus", in.genus},         {"enclosed_volume", in.enclosed_volume},
-                {"flipped", r.input.flipped}};
+  j["input"] = {{"file", r.input.source},     {"vertices", in.vertices},
+                {"faces", in.faces},          {"components", in.components},
+                {"genus", in.genus},          {"enclosed_volume", in.enclosed_volume},
+                {"flipped", r.input.flipped}, {"flipped_components", r.input.flipped_components}};
   j["fields"] = {{"voxel_size", fs.voxel_size},
                  {"strategy", fs.strategy},
                  {"sdf_active_voxels", fs.sdf_active_voxels},

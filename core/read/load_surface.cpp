@@ -9,7 +9,9 @@
 #include <utility>
 
 #include "core/base/errors.h"
+#include "core/base/parallel.h"
 #include "core/read/format_reader.h"
+#include "core/validity/inside_test.h"
 #include "core/validity/shell_checks.h"
 
 namespace vdb_shell {
@@ -198,20 +200,33 @@ void check_degenerate(const SoupFaces& f, const ValidationOptions& options,
   }
 }
 
-/// Faces with the same three corners as an earlier one.
+/// Faces with the corners of an earlier one: the same three vertices, or vertices at the same
+/// three positions (two parts touching face to face: between them the solid has no thickness,
+/// and a shell's tets on both sides would meet at faces that should bound it).
 void check_duplicates(const SoupFaces& f, ProblemCollector& duplicate) {
+  // Corners by position: the first vertex at each position stands for all.
+  std::vector<Vec3d> positions;
+  read_detail::PositionWelder weld(positions);
+  std::vector<std::uint32_t> at(f.soup.points.size());
+  for (std::size_t i = 0; i < at.size(); ++i)
+    at[i] = static_cast<std::uint32_t>(weld.index(f.soup.points[i]));
   std::vector<std::pair<Triangle, std::uint32_t>> sorted;
   sorted.reserve(f.tris.size());
   for (std::size_t t = 0; t < f.tris.size(); ++t) {
     Triangle k = f.tris[t].v;
+    for (std::uint32_t& v : k) v = at[v];
     std::sort(k.begin(), k.end());
     sorted.push_back({k, static_cast<std::uint32_t>(t)});
   }
   std::sort(sorted.begin(), sorted.end());
-  for (std::size_t i = 1; i < sorted.size(); ++i)
-    if (sorted[i].first == sorted[i - 1].first)
-      duplicate.add(f.face_name(f.tris[sorted[i].second]) + " repeats " +
-                    f.face_name(f.tris[sorted[i - 1].second]));
+  for (std::size_t i = 1; i < sorted.size(); ++i) {
+    if (sorted[i].first != sorted[i - 1].first) continue;
+    Triangle a = f.tris[sorted[i].second].v, b = f.tris[sorted[i - 1].second].v;
+    std::sort(a.begin(), a.end());
+    std::sort(b.begin(), b.end());
+    duplicate.add(f.face_name(f.tris[sorted[i].second]) + (a == b ? " repeats " : " lies on ") +
+                  f.face_name(f.tris[sorted[i - 1].second]));
+  }
 }
 
 /// Edge rules: every edge shared by exactly two faces that traverse it in opposite directions.
@@ -308,6 +323,91 @@ PolygonSoup weld_positions(const PolygonSoup& soup, std::size_t& welded) {
   return out;
 }
 
+/// Faces of each component tried, largest first, before its orientation is left undecided.
+constexpr std::size_t kOrientationProbes = 8;
+
+/// Turns every component of `tris` (a valid surface: closed, consistently oriented, components
+/// apart) whose faces point into the solid, the solid being where a ray crosses the surface an
+/// odd number of times (the even-odd rule of OpenVDB's sign fill and of independent checkers):
+/// a component inside an odd number of others bounds a cavity and faces into it. One component
+/// is judged by the sign of its enclosed volume; each of several by two points just in front of
+/// and just behind one of its largest faces, of which exactly the one behind must be inside
+/// (when a nearby part leaves both on one side, the next face decides). Returns the first
+/// triangle of each component turned, ascending, and sets `components`.
+std::vector<std::uint32_t> orient_components(const std::vector<Vec3d>& points,
+                                             std::vector<SoupTriangle>& tris,
+                                             std::size_t& components) {
+  DisjointSets sets(points.size());
+  for (const SoupTriangle& t : tris) {
+    sets.unite(t.v[0], t.v[1]);
+    sets.unite(t.v[1], t.v[2]);
+  }
+  // Components numbered in the order of their first triangle.
+  std::vector<std::uint32_t> number(points.size(), UINT32_MAX), comp(tris.size()), first;
+  for (std::size_t t = 0; t < tris.size(); ++t) {
+    std::uint32_t& n = number[sets.find(tris[t].v[0])];
+    if (n == UINT32_MAX) {
+      n = static_cast<std::uint32_t>(first.size());
+      first.push_back(static_cast<std::uint32_t>(t));
+    }
+    comp[t] = n;
+  }
+  components = first.size();
+  SurfaceMesh unit;
+  unit.points = points;
+  scale_by_power_of_two(unit.points, unit_scale_exponent(points));
+  unit.triangles.reserve(tris.size());
+  for (const SoupTriangle& t : tris) unit.triangles.push_back(t.v);
+
+  std::vector<char> turn(components, 0);
+  if (components == 1) {
+    turn[0] = signed_volume(unit) < 0.0;
+  } else if (components > 1) {
+    // Each component's largest faces, by twice their area.
+    std::vector<std::vector<std::pair<double, std::uint32_t>>> probes(components);
+    for (std::size_t t = 0; t < tris.size(); ++t) {
+      const Triangle& v = unit.triangles[t];
+      const Vec3d& a = unit.points[v[0]];
+      auto& best = probes[comp[t]];
+      best.emplace_back(-norm(cross(unit.points[v[1]] - a, unit.points[v[2]] - a)),
+                        static_cast<std::uint32_t>(t));
+      if (best.size() > 2 * kOrientationProbes) {
+        std::nth_element(best.begin(), best.begin() + kOrientationProbes, best.end());
+        best.resize(kOrientationProbes);
+      }
+    }
+    const double tolerance = 1e-12 * bounding_box(unit).diagonal();
+    const InsideTester inside(unit, tolerance);
+    for_each_index(components, [&](std::size_t c) {
+      auto& best = probes[c];
+      std::sort(best.begin(), best.end());
+      for (std::size_t i = 0; i < std::min(best.size(), kOrientationProbes); ++i) {
+        const Triangle& v = unit.triangles[best[i].second];
+        const Vec3d &a = unit.points[v[0]], &b = unit.points[v[1]], &d = unit.points[v[2]];
+        const Vec3d n = cross(b - a, d - a);
+        const double twice_area = norm(n);
+        // A thousandth of the inscribed circle's radius off the face.
+        const double offset =
+            1e-3 * twice_area / (distance(a, b) + distance(b, d) + distance(d, a));
+        if (!(offset > 4.0 * tolerance)) continue;
+        const Vec3d centre = (a + b + d) / 3.0, step = n * (offset / twice_area);
+        const bool front_outside = inside.outside(centre + step);
+        const bool back_outside = inside.outside(centre - step);
+        if (front_outside == back_outside) continue;
+        turn[c] = back_outside;
+        return;
+      }
+    });
+  }
+  std::vector<std::uint32_t> turned;
+  for (std::size_t c = 0; c < components; ++c)
+    if (turn[c]) turned.push_back(first[c]);
+  if (turned.empty()) return turned;
+  for (std::size_t t = 0; t < tris.size(); ++t)
+    if (turn[comp[t]]) std::swap(tris[t].v[1], tris[t].v[2]);
+  return turned;
+}
+
 }  // namespace
 
 std::vector<SurfaceProblem> find_surface_problems(const PolygonSoup& soup,
@@ -321,7 +421,10 @@ std::vector<SurfaceProblem> find_surface_problems(const PolygonSoup& soup,
                               "remove or collapse the zero-area faces", max);
   std::vector<char> is_degenerate;
   check_degenerate(faces, options, degenerate, is_degenerate);
-  ProblemCollector duplicate("duplicate faces", "remove the repeated faces", max);
+  ProblemCollector duplicate("duplicate faces (the corners of another face)",
+                             "remove the repeated faces, or join the parts that touch face to "
+                             "face",
+                             max);
   check_duplicates(faces, duplicate);
   ProblemCollector boundary("boundary edges (the surface is not closed)",
                             "close the holes or rebuild a watertight surface", max);
@@ -436,17 +539,27 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
       out.mesh.points.push_back(soup.points[i]);
     }
   out.dropped_unused_vertices = soup.points.size() - out.mesh.points.size();
-  for (const SoupTriangle& t : fan_triangulate(soup))
-    out.mesh.triangles.push_back({remap[t.v[0]], remap[t.v[1]], remap[t.v[2]]});
+  std::vector<SoupTriangle> tris = fan_triangulate(soup);
+  for (SoupTriangle& t : tris)
+    for (std::uint32_t& v : t.v) v = remap[v];
 
-  // The volume's sign at unit scale, where it neither overflows nor underflows.
-  int k = 0;
-  if (signed_volume(at_unit_scale(out.mesh, k)) < 0.0) {
-    for (Triangle& t : out.mesh.triangles) std::swap(t[1], t[2]);
+  std::size_t components = 0;
+  const std::vector<std::uint32_t> turned = orient_components(out.mesh.points, tris, components);
+  out.mesh.triangles.reserve(tris.size());
+  for (const SoupTriangle& t : tris) out.mesh.triangles.push_back(t.v);
+  if (!turned.empty() && turned.size() == components) {
     out.flipped = true;
     out.notices.push_back(
-        "the surface was oriented inward (negative enclosed volume); all faces "
+        "the surface was oriented inward (its faces point into the solid it bounds); all faces "
         "were flipped to point outward");
+  } else if (!turned.empty()) {
+    out.flipped_components = turned.size();
+    const bool tri_only = soup.polygons[tris[turned[0]].polygon].size() == 3;
+    out.notices.push_back(
+        std::to_string(turned.size()) + " of " + std::to_string(components) +
+        " components faced into the solid (a body's faces must point out of it, a cavity's into "
+        "it) and were flipped, the first being the component of " +
+        (tri_only ? "face " : "polygon ") + std::to_string(tris[turned[0]].polygon));
   }
   if (out.seam_vertices)
     out.notices.push_back(std::to_string(out.seam_vertices) +

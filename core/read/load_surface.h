@@ -2,15 +2,17 @@
 //
 // Every rule of a closed 2-manifold surface is checked and reported by name with its first
 // offending elements (indices, 0-based, and positions): NaN/Inf coordinates, out-of-range indices,
-// polygons with fewer than three corners, degenerate (zero-area) and duplicate faces, boundary
-// edges, non-manifold edges and vertices, inconsistent orientation, and (on a surface that
-// passes all of those) faces that cross each other. Several components are
-// allowed. A surface that breaks a rule only because vertices are written twice at one position
-// (seams) is taken with those welded, and a notice says so. A surface whose enclosed volume is
-// negative (normals pointing in) is flipped and a notice says so. Vertices no face uses are
-// dropped with a notice. The geometric rules (areas,
-// crossings, orientation) are judged on the points scaled by a power of two to unit magnitude,
-// exactly, so the verdicts do not depend on the input's unit; messages name the input's points.
+// polygons with fewer than three corners, degenerate (zero-area) and duplicate faces (the same
+// corners, or corners at the same positions: parts touching face to face), boundary edges,
+// non-manifold edges and vertices, inconsistent orientation, and (on a surface that passes all of
+// those) faces that cross each other. Several components are allowed. A surface that breaks a
+// rule only because vertices are written twice at one position (seams) is taken with those
+// welded, and a notice says so. Faces pointing into the solid (by the even-odd rule: a component
+// nested in an odd number of others bounds a cavity) are flipped, all of them or component by
+// component, and a notice says so. Vertices no face uses are dropped with a notice. The geometric
+// rules (areas, crossings, orientation) are judged on the points scaled by a power of two to unit
+// magnitude, exactly, so the verdicts do not depend on the input's unit; messages name the
+// input's points.
 #pragma once
 
 #include <cstddef>
@@ -53,7 +55,9 @@ struct LoadedSurface {
   /// Vertices at exactly the position of an earlier one, welded to it: seams written twice
   /// (make_surface() welds them only when that makes a valid surface of an invalid one).
   std::size_t seam_vertices = 0;
-  bool flipped = false;              ///< true when the input was oriented inward
+  bool flipped = false;  ///< true when the input was oriented inward
+  /// Components flipped alone (some of several faced into the solid; `flipped` when all did).
+  std::size_t flipped_components = 0;
   std::vector<std::string> notices;  ///< one sentence each, for the CLI to print
 };
 

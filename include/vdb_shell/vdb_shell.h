@@ -87,6 +87,8 @@ struct InputReport {
   std::string source;    ///< file path, or the name given to build_shell()
   SurfaceStats stats;    ///< vertices, faces, components, genus, volume (after validation)
   bool flipped = false;  ///< the input was oriented inward and was flipped
+  /// Components flipped alone: some of several faced into the solid (`flipped` when all did).
+  std::size_t flipped_components = 0;
 };
 
 /// What the validity search did (docs/validity.md).

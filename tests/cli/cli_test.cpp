@@ -290,6 +290,41 @@ TEST(CliRepair, SeamsWrittenTwiceAreWeldedNotRebuilt) {
   EXPECT_EQ(test::read_text(dir.file("shell.ele")), test::read_text(dir.file("repaired.ele")));
 }
 
+TEST(CliInput, ANestedComponentFacingOutIsACavity) {
+  // A sphere inside a sphere, both facing out (as parts are often exported): by the even-odd
+  // rule the inner one bounds a cavity, so it is turned and the shell fills the space between,
+  // checked here against the surface read back (its inner sphere facing in).
+  TempDir dir;
+  const SurfaceMesh sphere = make_shape("sphere");
+  SurfaceMesh nested = sphere;
+  const std::uint32_t n = static_cast<std::uint32_t>(sphere.points.size());
+  for (const Vec3d& p : sphere.points) nested.points.push_back(p * 0.5);
+  for (const Triangle& t : sphere.triangles)
+    nested.triangles.push_back({t[0] + n, t[1] + n, t[2] + n});
+  const std::string in = dir.file("nested.obj");
+  write_surface(in, nested);
+  const LoadedSurface loaded = load_surface(in);
+  EXPECT_EQ(loaded.flipped_components, 1u);
+  // Independent of the loader: the inner sphere's triangles now enclose a negative volume.
+  double inner = 0.0;
+  for (std::size_t t = sphere.triangles.size(); t < loaded.mesh.triangles.size(); ++t) {
+    const Triangle& v = loaded.mesh.triangles[t];
+    inner +=
+        dot(loaded.mesh.points[v[0]], cross(loaded.mesh.points[v[1]], loaded.mesh.points[v[2]]));
+  }
+  EXPECT_LT(inner, 0.0);
+
+  const InProcess r =
+      cli({in, "-r", "48", "-o", dir.file("shell.ele"), "--report", dir.file("r.json")});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("1 of 2 components faced into the solid"), std::string::npos) << r.err;
+  EXPECT_EQ(
+      nlohmann::json::parse(test::read_text(dir.file("r.json")))["input"]["flipped_components"], 1);
+  const TetMesh shell = test::read_tetgen_shell(dir.file("shell.ele"));
+  EXPECT_EQ(test::independent_shell_problems(loaded.mesh, shell), "");
+  EXPECT_GT(test::independent_coverage(loaded.mesh, shell), 0.8);
+}
+
 TEST(CliBatch, OneGoodOneBadInputExit2AndOneLineEach) {
   TempDir dir;
   test::write_text(dir.file("tet.obj"), kTetObj);

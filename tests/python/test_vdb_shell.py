@@ -161,6 +161,23 @@ def test_inward_surface_is_flipped(sphere):
     assert np.all(tet_volumes(r.points, r.tets) > 0)
 
 
+def test_inner_component_facing_out_bounds_a_cavity(sphere):
+    # A sphere inside a sphere, both facing out: the inner one is turned to face the cavity and
+    # no inner point lies in it (inside the inner sphere's inscribed ball, checked here).
+    v, f = sphere
+    nested_v = np.vstack([v, 0.5 * v])
+    nested_f = np.vstack([f, f + len(v)])
+    r = vdb_shell.build_shell(nested_v, nested_f, resolution=RESOLUTION)
+    assert r.report["input"]["flipped_components"] == 1
+    assert r.report["input"]["flipped"] is False
+    assert any("1 of 2 components" in n for n in r.notices), r.notices
+    assert np.all(tet_volumes(r.points, r.tets) > 0)
+    a, b, c = (0.5 * v[f[:, k]] for k in range(3))
+    normals = np.cross(b - a, c - a)
+    inscribed = np.min(np.abs(np.sum(normals * a, axis=1)) / np.linalg.norm(normals, axis=1))
+    assert np.all(np.linalg.norm(r.points[r.inner], axis=1) > inscribed)
+
+
 def test_seams_written_twice_are_welded(sphere):
     # Every triangle with corners of its own, as exporters split vertices along seams.
     v, f = sphere

@@ -364,6 +364,124 @@ TEST(Validate, SeveralComponentsAndQuadsAreAllowed) {
   EXPECT_NEAR(s.stats.enclosed_volume, 2.0, 1e-12);
 }
 
+/// Cubes as one soup: cube i has half side half[i], centre centre[i], and faces pointing out of
+/// it when outward[i]; its 8 vertices and 12 triangles follow those of cube i - 1.
+PolygonSoup cubes_soup(const std::vector<double>& half, const std::vector<Vec3d>& centre,
+                       const std::vector<bool>& outward) {
+  PolygonSoup soup;
+  for (std::size_t c = 0; c < half.size(); ++c) {
+    const std::int64_t o = static_cast<std::int64_t>(soup.points.size());
+    for (int i = 0; i < 8; ++i) {
+      const Vec3d corner{double(i == 1 || i == 2 || i == 5 || i == 6),
+                         double(i == 2 || i == 3 || i == 6 || i == 7), double(i >= 4)};
+      soup.points.push_back(centre[c] + (2.0 * corner - Vec3d{1, 1, 1}) * half[c]);
+    }
+    for (const char* f : kCubeFaces) {
+      int a = 0, b = 0, d = 0;
+      std::sscanf(f, "f %d %d %d", &a, &b, &d);
+      if (outward[c])
+        soup.polygons.push_back({o + a - 1, o + b - 1, o + d - 1});
+      else
+        soup.polygons.push_back({o + a - 1, o + d - 1, o + b - 1});
+    }
+  }
+  return soup;
+}
+
+/// The enclosed volume of the triangles [12 c, 12 c + 12) of `m` (cube c of cubes_soup()),
+/// computed here: sum of the signed volumes of the tets (origin, triangle).
+double cube_volume(const SurfaceMesh& m, std::size_t c) {
+  double v = 0.0;
+  for (std::size_t t = 12 * c; t < 12 * c + 12; ++t) {
+    const Vec3d &a = m.points[m.triangles[t][0]], &b = m.points[m.triangles[t][1]],
+                &d = m.points[m.triangles[t][2]];
+    v += dot(a, cross(b, d)) / 6.0;
+  }
+  return v;
+}
+
+TEST(Validate, ComponentsFacingIntoTheSolidAreFlippedByTheirNesting) {
+  const Vec3d o{0, 0, 0};
+  struct Case {
+    const char* what;
+    std::vector<double> half;
+    std::vector<Vec3d> centre;
+    std::vector<bool> outward;
+    std::vector<double> volume;  // after loading
+    bool flipped;
+    std::size_t flipped_components;
+  };
+  const std::vector<Case> cases = {
+      {"a body in a body: the inner one bounds a cavity",
+       {1, 0.5},
+       {o, o},
+       {true, true},
+       {8, -1},
+       false,
+       1},
+      {"a body, a cavity in it, and an island in the cavity, all facing out",
+       {1, 0.6, 0.3},
+       {o, o, o},
+       {true, true, true},
+       {8, -1.728, 0.216},
+       false,
+       1},
+      {"two bodies apart, the second inward",
+       {1, 0.5},
+       {o, {5, 0, 0}},
+       {true, false},
+       {8, 1},
+       false,
+       1},
+      {"a hollow cube written inside out", {1, 0.5}, {o, o}, {false, true}, {8, -1}, true, 0},
+      {"a hollow cube as it should be", {1, 0.5}, {o, o}, {true, false}, {8, -1}, false, 0},
+      {"cubes touching along an edge and at a face, far from the origin",
+       {1, 1, 0.5},
+       {{1e4, 1e4, 1e4}, {1e4 + 2, 1e4 + 2, 1e4}, {1e4, 1e4, 1e4 + 1.5}},
+       {true, true, true},
+       {8, 8, 1},
+       false,
+       0},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.what);
+    const LoadedSurface s = make_surface(cubes_soup(c.half, c.centre, c.outward), "cubes");
+    ASSERT_EQ(s.mesh.triangles.size(), 12 * c.half.size());
+    for (std::size_t k = 0; k < c.half.size(); ++k) {
+      // Volumes about the cube's own centre (the far cubes' sums would cancel badly at the origin).
+      SurfaceMesh local = s.mesh;
+      for (Vec3d& p : local.points) p = p - c.centre[k];
+      EXPECT_NEAR(cube_volume(local, k), c.volume[k], 1e-9) << "cube " << k;
+    }
+    EXPECT_EQ(s.flipped, c.flipped);
+    EXPECT_EQ(s.flipped_components, c.flipped_components);
+    EXPECT_EQ(s.notices.size(), c.flipped || c.flipped_components ? 1u : 0u);
+  }
+  // The notice counts the components and names the first one turned by a face.
+  const LoadedSurface s =
+      make_surface(cubes_soup({1, 0.6, 0.3}, {o, o, o}, {true, true, true}), "nested");
+  ASSERT_EQ(s.notices.size(), 1u);
+  EXPECT_TRUE(contains(s.notices[0], "1 of 3 components faced into the solid")) << s.notices[0];
+  EXPECT_TRUE(contains(s.notices[0], "component of face 12")) << s.notices[0];
+}
+
+TEST(Validate, PartsTouchingFaceToFaceAreDuplicateFaces) {
+  // Two unit cubes, the second on top of the first, each with its own vertices: the top face of
+  // the first lies on the bottom face of the second, triangle on triangle.
+  PolygonSoup soup = cubes_soup({0.5, 0.5}, {{0.5, 0.5, 0.5}, {0.5, 0.5, 1.5}}, {true, true});
+  std::string first;
+  for (const auto& p : find_surface_problems(soup))
+    if (contains(p.rule, "duplicate")) first = p.first;
+  EXPECT_TRUE(contains(first, "face 12 lies on face 2")) << first;
+  EXPECT_THROW(make_surface(soup, "stacked"), InputError);
+  // Welding the touching corners does not make it a surface either: still refused as it is.
+  try {
+    make_surface(soup, "stacked");
+  } catch (const InputError& e) {
+    EXPECT_TRUE(contains(e.what(), "lies on")) << e.what();
+  }
+}
+
 TEST(Validate, GenusOfATorusLikeBlock) {
   // A 3x3x1 block of unit cells with the centre cell removed: genus 1 (built as quads).
   PolygonSoup soup;
