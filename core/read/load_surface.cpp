@@ -323,6 +323,71 @@ PolygonSoup weld_positions(const PolygonSoup& soup, std::size_t& welded) {
   return out;
 }
 
+/// The rule of vertices whose faces form several fans (split_pinched_vertices() mends them).
+constexpr const char* kPinchedVertexRule = "non-manifold vertices (faces meeting only at a vertex)";
+
+/// `soup` with every vertex whose faces form several fans (parts of the surface meeting only at
+/// that point) given a copy of its own for each fan after the first, and how many vertices were
+/// split (0, with an empty soup, when none). Fans are joined across the polygons' sides shared
+/// by exactly two polygons; copies follow the soup's points, in the order their fans are met.
+PolygonSoup split_pinched_vertices(const PolygonSoup& soup, std::size_t& split) {
+  split = 0;
+  std::vector<std::size_t> start(soup.polygons.size() + 1, 0);  // polygon p's first corner
+  for (std::size_t p = 0; p < soup.polygons.size(); ++p)
+    start[p + 1] = start[p] + soup.polygons[p].size();
+  struct Side {
+    std::int64_t lo, hi;
+    std::size_t corner_lo, corner_hi;
+    bool operator<(const Side& o) const {
+      return std::tie(lo, hi, corner_lo) < std::tie(o.lo, o.hi, o.corner_lo);
+    }
+  };
+  std::vector<Side> sides;
+  sides.reserve(start.back());
+  for (std::size_t p = 0; p < soup.polygons.size(); ++p) {
+    const auto& poly = soup.polygons[p];
+    for (std::size_t k = 0; k < poly.size(); ++k) {
+      const std::size_t l = (k + 1) % poly.size();
+      const std::size_t ck = start[p] + k, cl = start[p] + l;
+      sides.push_back(poly[k] < poly[l] ? Side{poly[k], poly[l], ck, cl}
+                                        : Side{poly[l], poly[k], cl, ck});
+    }
+  }
+  std::sort(sides.begin(), sides.end());
+  DisjointSets fans(start.back());
+  for (std::size_t i = 0; i < sides.size();) {
+    std::size_t j = i;
+    while (j < sides.size() && sides[j].lo == sides[i].lo && sides[j].hi == sides[i].hi) ++j;
+    if (j - i == 2) {
+      fans.unite(sides[i].corner_lo, sides[i + 1].corner_lo);
+      fans.unite(sides[i].corner_hi, sides[i + 1].corner_hi);
+    }
+    i = j;
+  }
+  // Per vertex, the fan met first keeps it; per other fan (by its root corner), a copy.
+  PolygonSoup out = soup;
+  std::vector<std::size_t> first_fan(soup.points.size(), SIZE_MAX);
+  std::vector<std::int64_t> copy_of(start.back(), -1);
+  std::vector<char> was_split(soup.points.size(), 0);
+  for (std::size_t p = 0; p < out.polygons.size(); ++p)
+    for (std::size_t k = 0; k < out.polygons[p].size(); ++k) {
+      std::int64_t& v = out.polygons[p][k];
+      const std::size_t fan = fans.find(start[p] + k);
+      std::size_t& first = first_fan[static_cast<std::size_t>(v)];
+      if (first == SIZE_MAX) first = fan;
+      if (fan == first) continue;
+      if (copy_of[fan] < 0) {
+        copy_of[fan] = static_cast<std::int64_t>(out.points.size());
+        out.points.push_back(soup.points[static_cast<std::size_t>(v)]);
+        split += was_split[static_cast<std::size_t>(v)] ? 0 : 1;
+        was_split[static_cast<std::size_t>(v)] = 1;
+      }
+      v = copy_of[fan];
+    }
+  if (split == 0) return {};
+  return out;
+}
+
 /// Faces of each component tried, largest first, before its orientation is left undecided.
 constexpr std::size_t kOrientationProbes = 8;
 
@@ -434,7 +499,7 @@ std::vector<SurfaceProblem> find_surface_problems(const PolygonSoup& soup,
                                "orient all faces coherently (e.g. MeshLab's Re-Orient)", max);
   DisjointSets corners(faces.tris.size() * 3);  // fans around each vertex, for the vertex rule
   check_edges(faces, boundary, nonmanifold_edge, orientation, corners);
-  ProblemCollector nonmanifold_vertex("non-manifold vertices (faces meeting only at a vertex)",
+  ProblemCollector nonmanifold_vertex(kPinchedVertexRule,
                                       "split the vertex or join the parts along an edge", max);
   if (nonmanifold_edge.problem.count == 0)
     check_vertices(faces, is_degenerate, corners, nonmanifold_vertex);
@@ -502,14 +567,29 @@ SurfaceStats surface_stats(const SurfaceMesh& mesh) {
 LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
                            const ValidationOptions& options) {
   std::vector<SurfaceProblem> problems = find_surface_problems(input, options);
-  // Seams: a surface written with vertices repeated along its UV or normal seams is closed once
-  // the repeats at exactly one position are one vertex. Tried only on a surface that fails as it
-  // is (the parts of a valid surface that touch keep their own vertices), kept only if it passes.
-  std::size_t seam_vertices = 0;
-  PolygonSoup welded;
+  // Two faults whose mending keeps every polygon as written, tried only on a surface that fails
+  // as it is (the parts of a valid surface that touch keep their own vertices) and kept only if
+  // the result passes every rule. Seams: vertices repeated at exactly one position along UV or
+  // normal seams, made one. Then pinches: parts of the surface meeting only at a vertex, that
+  // vertex split, one per fan.
+  std::size_t seam_vertices = 0, pinched_vertices = 0;
+  PolygonSoup welded, split;
+  const PolygonSoup* mended = &input;
   if (!problems.empty()) {
     welded = weld_positions(input, seam_vertices);
-    if (seam_vertices > 0 && find_surface_problems(welded, options).empty()) problems.clear();
+    std::vector<SurfaceProblem> left = problems;
+    if (seam_vertices > 0) {
+      mended = &welded;
+      left = find_surface_problems(welded, options);
+    }
+    if (left.size() == 1 && left[0].rule == kPinchedVertexRule) {
+      split = split_pinched_vertices(*mended, pinched_vertices);
+      if (pinched_vertices > 0) {
+        mended = &split;
+        left = find_surface_problems(split, options);
+      }
+    }
+    if (left.empty()) problems.clear();
   }
   if (!problems.empty()) {
     std::string msg = source + ": not a closed 2-manifold triangle surface: ";
@@ -521,10 +601,11 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
     throw InputError(msg);
   }
 
-  const PolygonSoup& soup = seam_vertices > 0 ? welded : input;
+  const PolygonSoup& soup = *mended;
   LoadedSurface out;
   out.source = source;
   out.seam_vertices = seam_vertices;
+  out.pinched_vertices = pinched_vertices;
   out.polygons_read = soup.polygons.size();
   for (const auto& poly : soup.polygons)
     if (poly.size() > 3) ++out.triangulated_polygons;
@@ -565,6 +646,10 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
     out.notices.push_back(std::to_string(out.seam_vertices) +
                           " vertices at the position of an earlier vertex (seams written twice) "
                           "were welded to it: welded, the surface is closed");
+  if (out.pinched_vertices)
+    out.notices.push_back(std::to_string(out.pinched_vertices) +
+                          " vertices where parts of the surface meet only at that point were "
+                          "split, one vertex per fan of faces: split, the surface is 2-manifold");
   if (out.triangulated_polygons)
     out.notices.push_back(std::to_string(out.triangulated_polygons) +
                           " polygons with more than three corners were split into triangles");

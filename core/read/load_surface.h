@@ -55,6 +55,10 @@ struct LoadedSurface {
   /// Vertices at exactly the position of an earlier one, welded to it: seams written twice
   /// (make_surface() welds them only when that makes a valid surface of an invalid one).
   std::size_t seam_vertices = 0;
+  /// Vertices where parts of the surface meet only at that point, split into one vertex per fan
+  /// of faces, the copies after all other vertices (make_surface() splits them only when that,
+  /// after any welding, makes a valid surface of an invalid one).
+  std::size_t pinched_vertices = 0;
   bool flipped = false;  ///< true when the input was oriented inward
   /// Components flipped alone (some of several faced into the solid; `flipped` when all did).
   std::size_t flipped_components = 0;

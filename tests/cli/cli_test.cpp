@@ -325,6 +325,39 @@ TEST(CliInput, ANestedComponentFacingOutIsACavity) {
   EXPECT_GT(test::independent_coverage(loaded.mesh, shell), 0.8);
 }
 
+TEST(CliInput, PartsMeetingAtOneVertexAreSplitThere) {
+  // Two boxes sharing one corner vertex (the file indexes it from both): split, one vertex per
+  // box, and the shell is checked here against the surface read back.
+  TempDir dir;
+  const SurfaceMesh box = make_shape("box", 2);
+  SurfaceMesh pinched = box;
+  const std::uint32_t n = static_cast<std::uint32_t>(box.points.size());
+  std::uint32_t corner = 0, other = 0;  // (0.5, 0.5, 0.5) in the first box, (-0.5, ...) in it
+  for (std::uint32_t i = 0; i < n; ++i) {
+    if (box.points[i] == Vec3d{0.5, 0.5, 0.5}) corner = i;
+    if (box.points[i] == Vec3d{-0.5, -0.5, -0.5}) other = i;
+  }
+  for (const Vec3d& p : box.points) pinched.points.push_back(p + Vec3d{1, 1, 1});
+  for (const Triangle& t : box.triangles) {
+    Triangle u;
+    for (int c = 0; c < 3; ++c)
+      u[std::size_t(c)] = t[std::size_t(c)] == other ? corner : t[std::size_t(c)] + n;
+    pinched.triangles.push_back(u);
+  }
+  const std::string in = dir.file("pinched.obj");
+  write_surface(in, pinched);
+  const LoadedSurface loaded = load_surface(in);
+  EXPECT_EQ(loaded.pinched_vertices, 1u);
+  EXPECT_EQ(loaded.stats.components, 2u);
+
+  const InProcess r = cli({in, "-r", "48", "-o", dir.file("shell.ele")});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("meet only at that point were split"), std::string::npos) << r.err;
+  const TetMesh shell = test::read_tetgen_shell(dir.file("shell.ele"));
+  EXPECT_EQ(test::independent_shell_problems(loaded.mesh, shell), "");
+  EXPECT_GT(test::independent_coverage(loaded.mesh, shell), 0.8);
+}
+
 TEST(CliBatch, OneGoodOneBadInputExit2AndOneLineEach) {
   TempDir dir;
   test::write_text(dir.file("tet.obj"), kTetObj);

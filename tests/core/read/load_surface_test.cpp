@@ -87,15 +87,46 @@ TEST(Validate, ThreeFacesOnOneEdgeIsNonManifold) {
   EXPECT_TRUE(contains(e, "in 4 faces")) << e;
 }
 
-TEST(Validate, BowTieVertexIsNonManifold) {
-  // Two tetrahedra sharing only vertex 0.
+TEST(Validate, BowTieVertexIsNonManifoldAndSplitWhenThatIsAll) {
+  // Two tetrahedra sharing only vertex 0: the rule names it; loading splits it, one vertex per
+  // fan (the copy after the others), and keeps every face.
   const std::string text =
       "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv -1 0 0\nv 0 -1 0\nv 0 0 -1\n"
       "f 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n"
       "f 1 6 5\nf 1 5 7\nf 5 6 7\nf 6 1 7\n";
-  const std::string e = load_error("bowtie.obj", text);
-  EXPECT_TRUE(contains(e, "non-manifold vertices")) << e;
-  EXPECT_TRUE(contains(e, "vertex 0 at (0, 0, 0)")) << e;
+  TempDir dir;
+  write_text(dir.file("bowtie.obj"), text);
+  const std::vector<SurfaceProblem> problems =
+      find_surface_problems(read_polygon_soup(dir.file("bowtie.obj")));
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_TRUE(contains(problems[0].rule, "non-manifold vertices")) << problems[0].rule;
+  EXPECT_TRUE(contains(problems[0].first, "vertex 0 at (0, 0, 0)")) << problems[0].first;
+
+  const LoadedSurface s = load_surface(dir.file("bowtie.obj"));
+  EXPECT_EQ(s.pinched_vertices, 1u);
+  ASSERT_EQ(s.mesh.points.size(), 8u);
+  EXPECT_EQ(s.mesh.points[7], (Vec3d{0, 0, 0}));
+  EXPECT_EQ(s.stats.components, 2u);
+  ASSERT_EQ(s.mesh.triangles.size(), 8u);
+  for (std::size_t t = 0; t < 8; ++t) {
+    // The first tet keeps vertex 0, the second uses the copy; the other corners as written.
+    const std::uint32_t pinch = t < 4 ? 0u : 7u;
+    EXPECT_EQ(std::count(s.mesh.triangles[t].begin(), s.mesh.triangles[t].end(), pinch),
+              t == 2 || t == 6 ? 0 : 1)
+        << t;
+  }
+  // The second tet is written inside out as well: turned, with a notice of its own.
+  EXPECT_EQ(s.flipped_components, 1u);
+  ASSERT_EQ(s.notices.size(), 2u);
+  EXPECT_TRUE(contains(s.notices[1],
+                       "1 vertices where parts of the surface meet only at that "
+                       "point were split"))
+      << s.notices[1];
+
+  // With a face missing as well, splitting is no fix: refused with both problems as written.
+  const std::string open = text.substr(0, text.rfind("f 5 6 7"));
+  const std::string e = load_error("open_bowtie.obj", open + "f 6 1 7\n");
+  EXPECT_TRUE(contains(e, "boundary edges")) << e;
 }
 
 TEST(Validate, FlippedFaceIsInconsistent) {
