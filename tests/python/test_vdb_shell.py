@@ -178,6 +178,24 @@ def test_inner_component_facing_out_bounds_a_cavity(sphere):
     assert np.all(np.linalg.norm(r.points[r.inner], axis=1) > inscribed)
 
 
+def test_cubes_sharing_a_corner_vertex_are_split_there():
+    # Two cubes whose arrays share the vertex at their common corner (0.5, 0.5, 0.5): split, one
+    # vertex per cube (the copy after the others), and both shelled.
+    v, f = cube()
+    corner = int(np.flatnonzero((v == 0.5).all(axis=1))[0])
+    other = int(np.flatnonzero((v == -0.5).all(axis=1))[0])
+    f2 = f + len(v)
+    f2[f == other] = corner
+    r = vdb_shell.build_shell(np.vstack([v, v + 1.0]), np.vstack([f, f2]), resolution=RESOLUTION)
+    assert any("were split" in n for n in r.notices), r.notices
+    assert len(r.surface_vertex) == len(r.points)
+    # The second cube's own vertex there is unused (dropped): 15 vertices read, then the copy.
+    assert np.array_equal(r.points[2 * len(v) - 1], v[corner])
+    assert np.array_equal(r.points[corner], v[corner])
+    assert np.all(tet_volumes(r.points, r.tets) > 0)
+    assert r.report["input"]["components"] == 2
+
+
 def test_seams_written_twice_are_welded(sphere):
     # Every triangle with corners of its own, as exporters split vertices along seams.
     v, f = sphere
