@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Writes fuzz seeds for scripts/fuzz.sh: a tetrahedron with its corners written per face (seams
-stored twice, which validation welds) into SEEDS/obj; every .obj under SEEDS/obj converted to PLY
+stored twice, which validation welds), two tetrahedra sharing a vertex and two nested ones
+into SEEDS/obj; every .obj under SEEDS/obj converted to PLY
 (binary and ASCII), STL (binary and ASCII) and OFF; the tetrahedron in the variants meshio does
 not write (binary OFF, PLY triangle strips, big-endian PLY, 4OFF); and the shared meshes under
 64 kB.
@@ -19,6 +20,17 @@ faces = [(0, 2, 1), (0, 1, 3), (1, 2, 3), (2, 0, 3)]
 with open(os.path.join(seeds, "obj", "tet_apart.obj"), "w") as f:
     f.write("".join("v %g %g %g\n" % corners[v] for t in faces for v in t))
     f.write("".join("f %d %d %d\n" % (3 * k + 1, 3 * k + 2, 3 * k + 3) for k in range(4)))
+# Two tetrahedra sharing only a vertex, the second inside out (split there, then turned), and a
+# tetrahedron inside another, both facing out (the inner one turned to face the cavity).
+below = [(0, 0, 0), (-2, 0, 0), (0, -2, 0), (0, 0, -2)]
+with open(os.path.join(seeds, "obj", "tets_pinched.obj"), "w") as f:
+    f.write("".join("v %g %g %g\n" % c for c in corners + below[1:]))
+    f.write("".join("f %d %d %d\n" % tuple(v + 1 for v in t) for t in faces))
+    f.write("".join("f %d %d %d\n" % tuple(1 if v == 0 else v + 4 for v in t) for t in faces))
+with open(os.path.join(seeds, "obj", "tets_nested.obj"), "w") as f:
+    inner = [tuple(0.25 * x + 0.2 for x in c) for c in corners]
+    f.write("".join("v %g %g %g\n" % c for c in corners + inner))
+    f.write("".join("f %d %d %d\n" % tuple(v + 1 + 4 * k for v in t) for k in (0, 1) for t in faces))
 for path in sorted(glob.glob(os.path.join(seeds, "obj", "*.obj"))):
     name = os.path.splitext(os.path.basename(path))[0]
     mesh = meshio.read(path)
