@@ -323,8 +323,108 @@ PolygonSoup weld_positions(const PolygonSoup& soup, std::size_t& welded) {
   return out;
 }
 
-/// The rule of vertices whose faces form several fans (split_pinched_vertices() mends them).
+/// The rules that make_surface() mends (after welding) when they are all that is left:
+/// inconsistent orientation (orient_faces_alike()) and pinched vertices (split_pinched_vertices()).
+constexpr const char* kOrientationRule = "inconsistently oriented faces";
 constexpr const char* kPinchedVertexRule = "non-manifold vertices (faces meeting only at a vertex)";
+
+/// One side of a polygon: its ends (lo < hi), the polygon's corners there (indices into all
+/// corners, polygon by polygon), the polygon, and whether it runs from lo to hi.
+struct Side {
+  std::int64_t lo, hi;
+  std::size_t corner_lo, corner_hi;
+  std::uint32_t polygon;
+  bool forward;
+  bool operator<(const Side& o) const {
+    return std::tie(lo, hi, corner_lo) < std::tie(o.lo, o.hi, o.corner_lo);
+  }
+};
+
+/// Every side of every polygon of `soup`, sorted by its ends; `start` gets each polygon's first
+/// corner (and, last, the number of corners).
+std::vector<Side> polygon_sides(const PolygonSoup& soup, std::vector<std::size_t>& start) {
+  start.assign(soup.polygons.size() + 1, 0);
+  for (std::size_t p = 0; p < soup.polygons.size(); ++p)
+    start[p + 1] = start[p] + soup.polygons[p].size();
+  std::vector<Side> sides;
+  sides.reserve(start.back());
+  for (std::size_t p = 0; p < soup.polygons.size(); ++p) {
+    const auto& poly = soup.polygons[p];
+    const auto polygon = static_cast<std::uint32_t>(p);
+    for (std::size_t k = 0; k < poly.size(); ++k) {
+      const std::size_t l = (k + 1) % poly.size();
+      const std::size_t ck = start[p] + k, cl = start[p] + l;
+      sides.push_back(poly[k] < poly[l] ? Side{poly[k], poly[l], ck, cl, polygon, true}
+                                        : Side{poly[l], poly[k], cl, ck, polygon, false});
+    }
+  }
+  std::sort(sides.begin(), sides.end());
+  return sides;
+}
+
+/// Calls visit(a, b) for every run of sides [a, b) with the same ends, in order.
+template <class Visit>
+void for_each_edge(const std::vector<Side>& sides, const Visit& visit) {
+  for (std::size_t i = 0; i < sides.size();) {
+    std::size_t j = i;
+    while (j < sides.size() && sides[j].lo == sides[i].lo && sides[j].hi == sides[i].hi) ++j;
+    visit(i, j);
+    i = j;
+  }
+}
+
+/// `soup` with polygons turned so that the two polygons on every side shared by exactly two run
+/// along it in opposite directions, the fewer of each group of polygons joined by such sides
+/// turning (ties: those that disagree with the group's first), and how many were turned (0, with
+/// an empty soup, when none, or when a group cannot agree: a one-sided surface).
+PolygonSoup orient_faces_alike(const PolygonSoup& soup, std::size_t& turned) {
+  turned = 0;
+  std::vector<std::size_t> start;
+  const std::vector<Side> sides = polygon_sides(soup, start);
+  // Across each manifold side: the neighbour, and whether the two run the same way.
+  std::vector<std::vector<std::pair<std::uint32_t, bool>>> across(soup.polygons.size());
+  for_each_edge(sides, [&](std::size_t i, std::size_t j) {
+    if (j - i != 2 || sides[i].lo == sides[i].hi) return;
+    const bool same = sides[i].forward == sides[i + 1].forward;
+    across[sides[i].polygon].emplace_back(sides[i + 1].polygon, same);
+    across[sides[i + 1].polygon].emplace_back(sides[i].polygon, same);
+  });
+  std::vector<signed char> flip(soup.polygons.size(), -1);  // -1 not reached yet
+  std::vector<std::uint32_t> stack, group;
+  for (std::uint32_t root = 0; root < soup.polygons.size(); ++root) {
+    if (flip[root] >= 0) continue;
+    flip[root] = 0;
+    stack.push_back(root);
+    group.clear();
+    std::size_t flips = 0;
+    while (!stack.empty()) {
+      const std::uint32_t p = stack.back();
+      stack.pop_back();
+      group.push_back(p);
+      flips += static_cast<std::size_t>(flip[p]);
+      for (const auto& [q, same] : across[p]) {
+        const signed char want = static_cast<signed char>(flip[p] ^ (same ? 1 : 0));
+        if (flip[q] < 0) {
+          flip[q] = want;
+          stack.push_back(q);
+        } else if (flip[q] != want) {
+          return {};  // one-sided: no orientation agrees everywhere
+        }
+      }
+    }
+    // The fewer turn (which way the whole group faces is decided after).
+    if (2 * flips > group.size())
+      for (const std::uint32_t p : group) flip[p] ^= 1;
+  }
+  PolygonSoup out = soup;
+  for (std::size_t p = 0; p < out.polygons.size(); ++p)
+    if (flip[p] == 1) {
+      std::reverse(out.polygons[p].begin(), out.polygons[p].end());
+      ++turned;
+    }
+  if (turned == 0) return {};
+  return out;
+}
 
 /// `soup` with every vertex whose faces form several fans (parts of the surface meeting only at
 /// that point) given a copy of its own for each fan after the first, and how many vertices were
@@ -332,38 +432,14 @@ constexpr const char* kPinchedVertexRule = "non-manifold vertices (faces meeting
 /// by exactly two polygons; copies follow the soup's points, in the order their fans are met.
 PolygonSoup split_pinched_vertices(const PolygonSoup& soup, std::size_t& split) {
   split = 0;
-  std::vector<std::size_t> start(soup.polygons.size() + 1, 0);  // polygon p's first corner
-  for (std::size_t p = 0; p < soup.polygons.size(); ++p)
-    start[p + 1] = start[p] + soup.polygons[p].size();
-  struct Side {
-    std::int64_t lo, hi;
-    std::size_t corner_lo, corner_hi;
-    bool operator<(const Side& o) const {
-      return std::tie(lo, hi, corner_lo) < std::tie(o.lo, o.hi, o.corner_lo);
-    }
-  };
-  std::vector<Side> sides;
-  sides.reserve(start.back());
-  for (std::size_t p = 0; p < soup.polygons.size(); ++p) {
-    const auto& poly = soup.polygons[p];
-    for (std::size_t k = 0; k < poly.size(); ++k) {
-      const std::size_t l = (k + 1) % poly.size();
-      const std::size_t ck = start[p] + k, cl = start[p] + l;
-      sides.push_back(poly[k] < poly[l] ? Side{poly[k], poly[l], ck, cl}
-                                        : Side{poly[l], poly[k], cl, ck});
-    }
-  }
-  std::sort(sides.begin(), sides.end());
+  std::vector<std::size_t> start;
+  const std::vector<Side> sides = polygon_sides(soup, start);
   DisjointSets fans(start.back());
-  for (std::size_t i = 0; i < sides.size();) {
-    std::size_t j = i;
-    while (j < sides.size() && sides[j].lo == sides[i].lo && sides[j].hi == sides[i].hi) ++j;
-    if (j - i == 2) {
-      fans.unite(sides[i].corner_lo, sides[i + 1].corner_lo);
-      fans.unite(sides[i].corner_hi, sides[i + 1].corner_hi);
-    }
-    i = j;
-  }
+  for_each_edge(sides, [&](std::size_t i, std::size_t j) {
+    if (j - i != 2) return;
+    fans.unite(sides[i].corner_lo, sides[i + 1].corner_lo);
+    fans.unite(sides[i].corner_hi, sides[i + 1].corner_hi);
+  });
   // Per vertex, the fan met first keeps it; per other fan (by its root corner), a copy.
   PolygonSoup out = soup;
   std::vector<std::size_t> first_fan(soup.points.size(), SIZE_MAX);
@@ -495,7 +571,7 @@ std::vector<SurfaceProblem> find_surface_problems(const PolygonSoup& soup,
                             "close the holes or rebuild a watertight surface", max);
   ProblemCollector nonmanifold_edge("non-manifold edges (more than two faces on an edge)",
                                     "remove or separate the extra faces", max);
-  ProblemCollector orientation("inconsistently oriented faces",
+  ProblemCollector orientation(kOrientationRule,
                                "orient all faces coherently (e.g. MeshLab's Re-Orient)", max);
   DisjointSets corners(faces.tris.size() * 3);  // fans around each vertex, for the vertex rule
   check_edges(faces, boundary, nonmanifold_edge, orientation, corners);
@@ -567,27 +643,38 @@ SurfaceStats surface_stats(const SurfaceMesh& mesh) {
 LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
                            const ValidationOptions& options) {
   std::vector<SurfaceProblem> problems = find_surface_problems(input, options);
-  // Two faults whose mending keeps every polygon as written, tried only on a surface that fails
-  // as it is (the parts of a valid surface that touch keep their own vertices) and kept only if
-  // the result passes every rule. Seams: vertices repeated at exactly one position along UV or
-  // normal seams, made one. Then pinches: parts of the surface meeting only at a vertex, that
-  // vertex split, one per fan.
-  std::size_t seam_vertices = 0, pinched_vertices = 0;
-  PolygonSoup welded, split;
+  // Faults mended keeping every polygon as written (but for its direction), tried only on a
+  // surface that fails as it is (the parts of a valid surface that touch keep their own
+  // vertices) and kept only if the result passes every rule. Seams: vertices repeated at exactly
+  // one position along UV or normal seams, made one. Then, if nothing else is left, faces
+  // running against their neighbours, turned to agree with them; and pinches: parts of the
+  // surface meeting only at a vertex, that vertex split, one per fan.
+  std::size_t seam_vertices = 0, reoriented_faces = 0, pinched_vertices = 0;
+  PolygonSoup welded, oriented, split;
   const PolygonSoup* mended = &input;
   if (!problems.empty()) {
-    welded = weld_positions(input, seam_vertices);
     std::vector<SurfaceProblem> left = problems;
-    if (seam_vertices > 0) {
-      mended = &welded;
-      left = find_surface_problems(welded, options);
+    const auto take = [&](PolygonSoup& soup, std::size_t count) {
+      if (count == 0) return;
+      mended = &soup;
+      left = find_surface_problems(soup, options);
+    };
+    const auto left_only = [&](const char* rule) {
+      return std::any_of(left.begin(), left.end(),
+                         [&](const SurfaceProblem& p) { return p.rule == rule; }) &&
+             std::all_of(left.begin(), left.end(), [](const SurfaceProblem& p) {
+               return p.rule == kOrientationRule || p.rule == kPinchedVertexRule;
+             });
+    };
+    welded = weld_positions(input, seam_vertices);
+    take(welded, seam_vertices);
+    if (left_only(kOrientationRule)) {
+      oriented = orient_faces_alike(*mended, reoriented_faces);
+      take(oriented, reoriented_faces);
     }
-    if (left.size() == 1 && left[0].rule == kPinchedVertexRule) {
+    if (left_only(kPinchedVertexRule)) {
       split = split_pinched_vertices(*mended, pinched_vertices);
-      if (pinched_vertices > 0) {
-        mended = &split;
-        left = find_surface_problems(split, options);
-      }
+      take(split, pinched_vertices);
     }
     if (left.empty()) problems.clear();
   }
@@ -605,6 +692,7 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
   LoadedSurface out;
   out.source = source;
   out.seam_vertices = seam_vertices;
+  out.reoriented_faces = reoriented_faces;
   out.pinched_vertices = pinched_vertices;
   out.polygons_read = soup.polygons.size();
   for (const auto& poly : soup.polygons)
@@ -646,6 +734,10 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
     out.notices.push_back(std::to_string(out.seam_vertices) +
                           " vertices at the position of an earlier vertex (seams written twice) "
                           "were welded to it: welded, the surface is closed");
+  if (out.reoriented_faces)
+    out.notices.push_back(std::to_string(out.reoriented_faces) +
+                          " faces ran against their neighbours (inconsistent orientation) and were "
+                          "turned to agree with them");
   if (out.pinched_vertices)
     out.notices.push_back(std::to_string(out.pinched_vertices) +
                           " vertices where parts of the surface meet only at that point were "

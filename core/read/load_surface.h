@@ -55,6 +55,10 @@ struct LoadedSurface {
   /// Vertices at exactly the position of an earlier one, welded to it: seams written twice
   /// (make_surface() welds them only when that makes a valid surface of an invalid one).
   std::size_t seam_vertices = 0;
+  /// Faces turned to run against their neighbours along every shared edge, as a consistently
+  /// oriented surface's do (make_surface() turns them only when that, after any welding, makes a
+  /// valid surface of an invalid one; which way the whole faces is decided after).
+  std::size_t reoriented_faces = 0;
   /// Vertices where parts of the surface meet only at that point, split into one vertex per fan
   /// of faces, the copies after all other vertices (make_surface() splits them only when that,
   /// after any welding, makes a valid surface of an invalid one).

@@ -358,6 +358,35 @@ TEST(CliInput, PartsMeetingAtOneVertexAreSplitThere) {
   EXPECT_GT(test::independent_coverage(loaded.mesh, shell), 0.8);
 }
 
+TEST(CliInput, FacesRunningAgainstTheirNeighboursAreTurned) {
+  // The horn with every 7th face written the other way round: turned back as it is loaded, and
+  // the shell is checked here against the surface read back (every face as the horn's own).
+  TempDir dir;
+  const SurfaceMesh horn = make_shape("horn");
+  SurfaceMesh mixed = horn;
+  for (std::size_t f = 0; f < mixed.triangles.size(); f += 7)
+    std::swap(mixed.triangles[f][1], mixed.triangles[f][2]);
+  const std::string in = dir.file("mixed.obj");
+  write_surface(in, mixed);
+  const LoadedSurface loaded = load_surface(in);
+  EXPECT_EQ(loaded.reoriented_faces, (horn.triangles.size() + 6) / 7);
+  for (std::size_t f = 0; f < horn.triangles.size(); ++f) {
+    const Triangle& t = loaded.mesh.triangles[f];
+    const Triangle& h = horn.triangles[f];
+    // The same corners in the same cyclic order as the horn's.
+    const bool same = (t[0] == h[0] && t[1] == h[1] && t[2] == h[2]) ||
+                      (t[0] == h[1] && t[1] == h[2] && t[2] == h[0]) ||
+                      (t[0] == h[2] && t[1] == h[0] && t[2] == h[1]);
+    ASSERT_TRUE(same) << f;
+  }
+  const InProcess r = cli({in, "-r", "48", "-o", dir.file("shell.ele")});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("ran against their neighbours"), std::string::npos) << r.err;
+  EXPECT_EQ(
+      test::independent_shell_problems(loaded.mesh, test::read_tetgen_shell(dir.file("shell.ele"))),
+      "");
+}
+
 TEST(CliBatch, OneGoodOneBadInputExit2AndOneLineEach) {
   TempDir dir;
   test::write_text(dir.file("tet.obj"), kTetObj);

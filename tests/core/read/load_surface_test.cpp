@@ -58,6 +58,42 @@ bool contains(const std::string& s, const std::string& part) {
   return s.find(part) != std::string::npos;
 }
 
+/// Cubes as one soup: cube i has half side half[i], centre centre[i], and faces pointing out of
+/// it when outward[i]; its 8 vertices and 12 triangles follow those of cube i - 1.
+PolygonSoup cubes_soup(const std::vector<double>& half, const std::vector<Vec3d>& centre,
+                       const std::vector<bool>& outward) {
+  PolygonSoup soup;
+  for (std::size_t c = 0; c < half.size(); ++c) {
+    const std::int64_t o = static_cast<std::int64_t>(soup.points.size());
+    for (int i = 0; i < 8; ++i) {
+      const Vec3d corner{double(i == 1 || i == 2 || i == 5 || i == 6),
+                         double(i == 2 || i == 3 || i == 6 || i == 7), double(i >= 4)};
+      soup.points.push_back(centre[c] + (2.0 * corner - Vec3d{1, 1, 1}) * half[c]);
+    }
+    for (const char* f : kCubeFaces) {
+      int a = 0, b = 0, d = 0;
+      std::sscanf(f, "f %d %d %d", &a, &b, &d);
+      if (outward[c])
+        soup.polygons.push_back({o + a - 1, o + b - 1, o + d - 1});
+      else
+        soup.polygons.push_back({o + a - 1, o + d - 1, o + b - 1});
+    }
+  }
+  return soup;
+}
+
+/// The enclosed volume of the triangles [12 c, 12 c + 12) of `m` (cube c of cubes_soup()),
+/// computed here: sum of the signed volumes of the tets (origin, triangle).
+double cube_volume(const SurfaceMesh& m, std::size_t c) {
+  double v = 0.0;
+  for (std::size_t t = 12 * c; t < 12 * c + 12; ++t) {
+    const Vec3d &a = m.points[m.triangles[t][0]], &b = m.points[m.triangles[t][1]],
+                &d = m.points[m.triangles[t][2]];
+    v += dot(a, cross(b, d)) / 6.0;
+  }
+  return v;
+}
+
 TEST(Validate, CubeIsValidWithExactStats) {
   TempDir dir;
   write_text(dir.file("cube.obj"), cube_obj());
@@ -129,8 +165,31 @@ TEST(Validate, BowTieVertexIsNonManifoldAndSplitWhenThatIsAll) {
   EXPECT_TRUE(contains(e, "boundary edges")) << e;
 }
 
-TEST(Validate, FlippedFaceIsInconsistent) {
-  const std::string e = load_error("flip.obj", cube_obj(-1, "", 3));
+TEST(Validate, FlippedFaceIsInconsistentAndTurnedWhenThatIsAll) {
+  // The cube with face 3 written the other way round: the rule names it; loading turns it back
+  // (the fewer of the faces that disagree), and the cube encloses its volume again.
+  TempDir dir;
+  write_text(dir.file("flip.obj"), cube_obj(-1, "", 3));
+  const std::vector<SurfaceProblem> problems =
+      find_surface_problems(read_polygon_soup(dir.file("flip.obj")));
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_TRUE(contains(problems[0].rule, "inconsistently oriented")) << problems[0].rule;
+  const LoadedSurface s = load_surface(dir.file("flip.obj"));
+  EXPECT_EQ(s.reoriented_faces, 1u);
+  EXPECT_FALSE(s.flipped);
+  // "f 5 8 7" runs again as "f 5 7 8" does (its corners in reverse, from the last).
+  EXPECT_EQ(s.mesh.triangles[3], (Triangle{6, 7, 4}));
+  EXPECT_NEAR(cube_volume(s.mesh, 0), 1.0, 1e-12);
+  ASSERT_EQ(s.notices.size(), 1u);
+  EXPECT_TRUE(contains(s.notices[0], "1 faces ran against their neighbours")) << s.notices[0];
+
+  // A one-sided surface (the projective plane in 6 vertices, 10 triangles, immersed crossing
+  // itself) has no orientation to agree on: refused as written.
+  const std::string rp2 =
+      "v 0 0 0\nv 1 0.1 0.2\nv 0.3 1 0.1\nv 0.2 0.4 1\nv 0.9 0.8 0.7\nv 0.6 0.1 0.9\n"
+      "f 1 2 3\nf 1 3 4\nf 1 4 5\nf 1 5 6\nf 1 6 2\nf 2 3 5\nf 3 4 6\nf 4 5 2\nf 5 6 3\n"
+      "f 6 2 4\n";
+  const std::string e = load_error("rp2.obj", rp2);
   EXPECT_TRUE(contains(e, "inconsistently oriented")) << e;
 }
 
@@ -393,42 +452,6 @@ TEST(Validate, SeveralComponentsAndQuadsAreAllowed) {
   EXPECT_EQ(s.stats.faces, 24u);
   EXPECT_EQ(s.triangulated_polygons, 12u);
   EXPECT_NEAR(s.stats.enclosed_volume, 2.0, 1e-12);
-}
-
-/// Cubes as one soup: cube i has half side half[i], centre centre[i], and faces pointing out of
-/// it when outward[i]; its 8 vertices and 12 triangles follow those of cube i - 1.
-PolygonSoup cubes_soup(const std::vector<double>& half, const std::vector<Vec3d>& centre,
-                       const std::vector<bool>& outward) {
-  PolygonSoup soup;
-  for (std::size_t c = 0; c < half.size(); ++c) {
-    const std::int64_t o = static_cast<std::int64_t>(soup.points.size());
-    for (int i = 0; i < 8; ++i) {
-      const Vec3d corner{double(i == 1 || i == 2 || i == 5 || i == 6),
-                         double(i == 2 || i == 3 || i == 6 || i == 7), double(i >= 4)};
-      soup.points.push_back(centre[c] + (2.0 * corner - Vec3d{1, 1, 1}) * half[c]);
-    }
-    for (const char* f : kCubeFaces) {
-      int a = 0, b = 0, d = 0;
-      std::sscanf(f, "f %d %d %d", &a, &b, &d);
-      if (outward[c])
-        soup.polygons.push_back({o + a - 1, o + b - 1, o + d - 1});
-      else
-        soup.polygons.push_back({o + a - 1, o + d - 1, o + b - 1});
-    }
-  }
-  return soup;
-}
-
-/// The enclosed volume of the triangles [12 c, 12 c + 12) of `m` (cube c of cubes_soup()),
-/// computed here: sum of the signed volumes of the tets (origin, triangle).
-double cube_volume(const SurfaceMesh& m, std::size_t c) {
-  double v = 0.0;
-  for (std::size_t t = 12 * c; t < 12 * c + 12; ++t) {
-    const Vec3d &a = m.points[m.triangles[t][0]], &b = m.points[m.triangles[t][1]],
-                &d = m.points[m.triangles[t][2]];
-    v += dot(a, cross(b, d)) / 6.0;
-  }
-  return v;
 }
 
 TEST(Validate, ComponentsFacingIntoTheSolidAreFlippedByTheirNesting) {
