@@ -255,6 +255,15 @@ TEST(CliRepair, ACleanInputIsKeptAndGivesThePlainShell) {
   EXPECT_EQ(repair["faces"], 408);
 }
 
+/// Runs the command on `in` at 48^3 into `dir`/shell.ele, expects exit 0 with `notice` on
+/// stderr, and returns the shell read back (for the caller's independent check).
+TetMesh shell_with_notice(const TempDir& dir, const std::string& in, const std::string& notice) {
+  const InProcess r = cli({in, "-r", "48", "-o", dir.file("shell.ele")});
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find(notice), std::string::npos) << r.err;
+  return test::read_tetgen_shell(dir.file("shell.ele"));
+}
+
 TEST(CliRepair, SeamsWrittenTwiceAreWeldedNotRebuilt) {
   // The horn with every triangle's corners written apart, as an exporter splitting vertices
   // along seams writes them: welded with a notice, with or without --repair, and the shell is
@@ -276,12 +285,9 @@ TEST(CliRepair, SeamsWrittenTwiceAreWeldedNotRebuilt) {
   EXPECT_EQ(welded.mesh.points.size(), horn.points.size());
   EXPECT_EQ(welded.seam_vertices, apart.points.size() - horn.points.size());
 
-  const InProcess r = cli({in, "-r", "48", "-o", dir.file("shell.ele")});
-  ASSERT_EQ(r.code, 0) << r.err;
-  EXPECT_NE(r.err.find("(seams written twice) were welded"), std::string::npos) << r.err;
-  EXPECT_EQ(
-      test::independent_shell_problems(welded.mesh, test::read_tetgen_shell(dir.file("shell.ele"))),
-      "");
+  EXPECT_EQ(test::independent_shell_problems(
+                welded.mesh, shell_with_notice(dir, in, "(seams written twice) were welded")),
+            "");
   const InProcess repaired = cli(
       {in, "-r", "48", "--repair", "-o", dir.file("repaired.ele"), "--report", dir.file("r.json")});
   ASSERT_EQ(repaired.code, 0) << repaired.err;
@@ -350,10 +356,7 @@ TEST(CliInput, PartsMeetingAtOneVertexAreSplitThere) {
   EXPECT_EQ(loaded.pinched_vertices, 1u);
   EXPECT_EQ(loaded.stats.components, 2u);
 
-  const InProcess r = cli({in, "-r", "48", "-o", dir.file("shell.ele")});
-  ASSERT_EQ(r.code, 0) << r.err;
-  EXPECT_NE(r.err.find("meet only at that point were split"), std::string::npos) << r.err;
-  const TetMesh shell = test::read_tetgen_shell(dir.file("shell.ele"));
+  const TetMesh shell = shell_with_notice(dir, in, "meet only at that point were split");
   EXPECT_EQ(test::independent_shell_problems(loaded.mesh, shell), "");
   EXPECT_GT(test::independent_coverage(loaded.mesh, shell), 0.8);
 }
@@ -379,12 +382,9 @@ TEST(CliInput, FacesRunningAgainstTheirNeighboursAreTurned) {
                       (t[0] == h[2] && t[1] == h[0] && t[2] == h[1]);
     ASSERT_TRUE(same) << f;
   }
-  const InProcess r = cli({in, "-r", "48", "-o", dir.file("shell.ele")});
-  ASSERT_EQ(r.code, 0) << r.err;
-  EXPECT_NE(r.err.find("ran against their neighbours"), std::string::npos) << r.err;
-  EXPECT_EQ(
-      test::independent_shell_problems(loaded.mesh, test::read_tetgen_shell(dir.file("shell.ele"))),
-      "");
+  EXPECT_EQ(test::independent_shell_problems(
+                loaded.mesh, shell_with_notice(dir, in, "ran against their neighbours")),
+            "");
 }
 
 TEST(CliBatch, OneGoodOneBadInputExit2AndOneLineEach) {
