@@ -177,6 +177,16 @@ bool check_elements(const PolygonSoup& soup, std::size_t max,
   return elements_ok;
 }
 
+/// Per point, the index in `positions` (filled here, in order of first appearance) of its
+/// position: points at exactly one position share one index.
+std::vector<std::int64_t> position_indices(const std::vector<Vec3d>& points,
+                                           std::vector<Vec3d>& positions) {
+  std::vector<std::int64_t> index(points.size());
+  read_detail::PositionWelder weld(positions);
+  for (std::size_t i = 0; i < points.size(); ++i) index[i] = weld.index(points[i]);
+  return index;
+}
+
 /// Faces of zero area (a repeated corner, or below the area threshold); marks them.
 void check_degenerate(const SoupFaces& f, const ValidationOptions& options,
                       ProblemCollector& degenerate, std::vector<char>& is_degenerate) {
@@ -206,15 +216,12 @@ void check_degenerate(const SoupFaces& f, const ValidationOptions& options,
 void check_duplicates(const SoupFaces& f, ProblemCollector& duplicate) {
   // Corners by position: the first vertex at each position stands for all.
   std::vector<Vec3d> positions;
-  read_detail::PositionWelder weld(positions);
-  std::vector<std::uint32_t> at(f.soup.points.size());
-  for (std::size_t i = 0; i < at.size(); ++i)
-    at[i] = static_cast<std::uint32_t>(weld.index(f.soup.points[i]));
+  const std::vector<std::int64_t> at = position_indices(f.soup.points, positions);
   std::vector<std::pair<Triangle, std::uint32_t>> sorted;
   sorted.reserve(f.tris.size());
   for (std::size_t t = 0; t < f.tris.size(); ++t) {
     Triangle k = f.tris[t].v;
-    for (std::uint32_t& v : k) v = at[v];
+    for (std::uint32_t& v : k) v = static_cast<std::uint32_t>(at[v]);
     std::sort(k.begin(), k.end());
     sorted.push_back({k, static_cast<std::uint32_t>(t)});
   }
@@ -304,9 +311,7 @@ void check_crossings(const SoupFaces& faces, ProblemCollector& crossing) {
 PolygonSoup weld_positions(const PolygonSoup& soup, std::size_t& welded) {
   welded = 0;
   PolygonSoup out;
-  std::vector<std::int64_t> index(soup.points.size());
-  read_detail::PositionWelder weld(out.points);
-  for (std::size_t i = 0; i < soup.points.size(); ++i) index[i] = weld.index(soup.points[i]);
+  const std::vector<std::int64_t> index = position_indices(soup.points, out.points);
   if (out.points.size() == soup.points.size()) return {};
   const std::int64_t n = static_cast<std::int64_t>(soup.points.size());
   std::vector<char> used(soup.points.size()), used_after(out.points.size());
@@ -730,24 +735,21 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
         "it) and were flipped, the first being the component of " +
         (tri_only ? "face " : "polygon ") + std::to_string(tris[turned[0]].polygon));
   }
-  if (out.seam_vertices)
-    out.notices.push_back(std::to_string(out.seam_vertices) +
-                          " vertices at the position of an earlier vertex (seams written twice) "
-                          "were welded to it: welded, the surface is closed");
-  if (out.reoriented_faces)
-    out.notices.push_back(std::to_string(out.reoriented_faces) +
-                          " faces ran against their neighbours (inconsistent orientation) and were "
-                          "turned to agree with them");
-  if (out.pinched_vertices)
-    out.notices.push_back(std::to_string(out.pinched_vertices) +
-                          " vertices where parts of the surface meet only at that point were "
-                          "split, one vertex per fan of faces: split, the surface is 2-manifold");
-  if (out.triangulated_polygons)
-    out.notices.push_back(std::to_string(out.triangulated_polygons) +
-                          " polygons with more than three corners were split into triangles");
-  if (out.dropped_unused_vertices)
-    out.notices.push_back(std::to_string(out.dropped_unused_vertices) +
-                          " vertices used by no face were dropped");
+  const auto note = [&](std::size_t count, const char* what) {
+    if (count) out.notices.push_back(std::to_string(count) + what);
+  };
+  note(out.seam_vertices,
+       " vertices at the position of an earlier vertex (seams written twice) were welded to it: "
+       "welded, the surface is closed");
+  note(out.reoriented_faces,
+       " faces ran against their neighbours (inconsistent orientation) and were turned to agree "
+       "with them");
+  note(out.pinched_vertices,
+       " vertices where parts of the surface meet only at that point were split, one vertex per "
+       "fan of faces: split, the surface is 2-manifold");
+  note(out.triangulated_polygons,
+       " polygons with more than three corners were split into triangles");
+  note(out.dropped_unused_vertices, " vertices used by no face were dropped");
   out.stats = surface_stats(out.mesh);
   return out;
 }
