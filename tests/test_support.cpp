@@ -451,4 +451,66 @@ std::vector<std::pair<std::size_t, std::size_t>> self_intersections(const Surfac
   return hits;
 }
 
+SurfaceMesh with_vertices_near_edge_ends(const SurfaceMesh& mesh, std::size_t every, double t,
+                                         std::vector<InsertedVertex>& inserted) {
+  SurfaceMesh out = mesh;
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<std::uint32_t>> faces_of;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> edges;  // in order of first appearance
+  for (std::uint32_t f = 0; f < mesh.triangles.size(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t a = mesh.triangles[f][k], b = mesh.triangles[f][(k + 1) % 3];
+      auto& faces = faces_of[{std::min(a, b), std::max(a, b)}];
+      if (faces.empty()) edges.emplace_back(std::min(a, b), std::max(a, b));
+      faces.push_back(f);
+    }
+  std::vector<char> split(mesh.triangles.size(), 0);
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<std::uint32_t>> chain;
+  std::size_t turn = 0;
+  for (std::size_t e = 0; e < edges.size(); e += every) {
+    const auto [a, b] = edges[e];
+    const auto& faces = faces_of[edges[e]];
+    if (std::any_of(faces.begin(), faces.end(), [&](std::uint32_t f) { return split[f]; }))
+      continue;
+    for (const std::uint32_t f : faces) split[f] = 1;
+    std::vector<std::uint32_t>& ids = chain[edges[e]];
+    ids.push_back(a);
+    const auto insert = [&](std::uint32_t near, std::uint32_t far, double at) {
+      const Vec3d& p = mesh.points[near];
+      const Vec3d& q = mesh.points[far];
+      ids.push_back(static_cast<std::uint32_t>(out.points.size()));
+      inserted.push_back({ids.back(), near, far, at});
+      out.points.push_back(p + (q - p) * at);
+    };
+    switch (turn++ % 3) {
+      case 0:
+        insert(a, b, t);
+        break;
+      case 1:
+        insert(a, b, t);
+        insert(a, b, 2 * t);
+        break;
+      default:
+        insert(a, b, t);
+        insert(b, a, t);
+    }
+    ids.push_back(b);
+  }
+  out.triangles.clear();
+  for (const Triangle& tri : mesh.triangles) {
+    int k = 0;
+    while (k < 3 && !chain.count({std::min(tri[k], tri[(k + 1) % 3]),
+                                  std::max(tri[k], tri[(k + 1) % 3])}))
+      ++k;
+    if (k == 3) {
+      out.triangles.push_back(tri);
+      continue;
+    }
+    const std::uint32_t a = tri[k], b = tri[(k + 1) % 3], c = tri[(k + 2) % 3];
+    std::vector<std::uint32_t> ids = chain[{std::min(a, b), std::max(a, b)}];
+    if (ids.front() != a) std::reverse(ids.begin(), ids.end());
+    for (std::size_t i = 0; i + 1 < ids.size(); ++i) out.triangles.push_back({ids[i], ids[i + 1], c});
+  }
+  return out;
+}
+
 }  // namespace vdb_shell::test

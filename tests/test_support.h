@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <utility>
@@ -95,5 +96,19 @@ bool triangles_intersect(const std::array<Vec3d, 3>& t, const std::array<Vec3d, 
 /// test, which ignores contact at the shared vertex). Proper crossings only: a contact exactly
 /// along an edge or at a vertex, within 1e-10 relative, is not reported.
 std::vector<std::pair<std::size_t, std::size_t>> self_intersections(const SurfaceMesh& mesh);
+
+/// A vertex with_vertices_near_edge_ends() inserted: on the edge (near, far), at `t` of its
+/// length from `near`.
+struct InsertedVertex {
+  std::uint32_t vertex = 0, near = 0, far = 0;
+  double t = 0;
+};
+
+/// `mesh` with vertices inserted on every `every`-th edge (in the order of first appearance,
+/// skipping edges with a face already split), the two faces of each such edge fanned from their
+/// third corners. The edges take turns: one vertex at `t` of the edge from its smaller end; two,
+/// at t and 2t; one at t from each end. Appends the new vertices to `inserted`.
+SurfaceMesh with_vertices_near_edge_ends(const SurfaceMesh& mesh, std::size_t every, double t,
+                                         std::vector<InsertedVertex>& inserted);
 
 }  // namespace vdb_shell::test

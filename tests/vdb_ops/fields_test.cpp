@@ -9,18 +9,26 @@
 #include <tbb/global_control.h>
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <iterator>
+#include <limits>
 #include <memory>
+#include <mutex>
 #include <random>
 #include <string>
+#include <thread>
 
 #include "assets/shapes.h"
 #include "core/base/errors.h"
+#include "core/base/geometry.h"
+#include "core/base/run_control.h"
 #include "core/read/load_surface.h"
 #include "tests/test_support.h"
 #include "vdb_ops/fields.h"
@@ -302,6 +310,56 @@ MedialInfo medial_info(const Fields& fields, int i, int j, int k) {
                            std::lround(std::abs(c.z) / h)};
   std::sort(a.begin(), a.end(), std::greater<long>());
   return {a[0] == a[1], double(a[0] - a[1]) * h / std::sqrt(2.0)};
+}
+
+TEST(FieldsSliver, TrianglesDegenerateInFloatGetDistancesAndTheFillEnds) {
+  // Vertices inserted 1e-7 of an edge's length from its end: at 64^3 the slivers between them
+  // and the end have two corners within float rounding in index space. The float distance to
+  // such a triangle divided zero by zero (NaN), a voxel whose only candidate it was never got
+  // a finite distance, and the interior fill waited for it forever. A watchdog cancels the
+  // build after 120 s (it takes well under a second).
+  std::vector<test::InsertedVertex> inserted;
+  const SurfaceMesh mesh =
+      test::with_vertices_near_edge_ends(make_shape("sphere", 1), 3, 1e-7, inserted);
+  ASSERT_GE(inserted.size(), 50u);
+  std::atomic<bool> cancel{false};
+  std::mutex mutex;
+  std::condition_variable done;
+  bool finished = false;
+  std::thread watchdog([&] {
+    std::unique_lock<std::mutex> lock(mutex);
+    if (!done.wait_for(lock, std::chrono::seconds(120), [&] { return finished; })) cancel = true;
+  });
+  RunControl control;
+  control.cancel = &cancel;
+  std::unique_ptr<Fields> fields;
+  FieldOptions options;
+  options.resolution = 64;
+  EXPECT_NO_THROW(fields = build_fields(mesh, options, StageMonitor(control, "fields")));
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    finished = true;
+  }
+  done.notify_one();
+  watchdog.join();
+  ASSERT_TRUE(fields);
+  // Inside, phi is the distance to the nearest triangle (computed here, in double) within half a
+  // voxel, at every 7th voxel.
+  const double h = fields->voxel_size();
+  std::size_t checked = 0, n = 0;
+  double worst = 0;
+  for_each_voxel(*fields, [&](int i, int j, int k) {
+    if (n++ % 7 != 0 || !(fields->phi_at_voxel(i, j, k) < 0)) return;
+    const Vec3d p = fields->voxel_center(i, j, k);
+    double d2 = std::numeric_limits<double>::infinity();
+    for (const Triangle& t : mesh.triangles)
+      d2 = std::min(d2, point_triangle_distance2(p, mesh.points[t[0]], mesh.points[t[1]],
+                                                 mesh.points[t[2]]));
+    worst = std::max(worst, std::abs(-fields->phi_at_voxel(i, j, k) - std::sqrt(d2)));
+    ++checked;
+  });
+  EXPECT_GT(checked, 1000u);
+  EXPECT_LT(worst, 0.5 * h) << worst / h << " voxels";
 }
 
 TEST(FieldsBox, ExactDistanceInside) {

@@ -103,6 +103,22 @@ inline float point_triangle_distance2f(const float (&p)[3], const TriangleF& t) 
   return dot3(q, q);
 }
 
+/// Squared distance from p to the nearest of a triangle's three edges, float: what
+/// point_triangle_distance2f() measures for a triangle that is a segment or a point in float
+/// (two corners within rounding of each other), where its formulas divide zero by zero.
+inline float edges_distance2f(const float (&p)[3], const TriangleF& t) {
+  const float ap[3] = {p[0] - t.a[0], p[1] - t.a[1], p[2] - t.a[2]};
+  const float bc[3] = {t.ac[0] - t.ab[0], t.ac[1] - t.ab[1], t.ac[2] - t.ab[2]};
+  const float bp[3] = {ap[0] - t.ab[0], ap[1] - t.ab[1], ap[2] - t.ab[2]};
+  const auto segment = [](const float* from, const float* along) {  // from: p - start
+    const float l2 = dot3(along, along);
+    const float s = l2 > 0.0f ? std::min(1.0f, std::max(0.0f, dot3(from, along) / l2)) : 0.0f;
+    const float q[3] = {from[0] - along[0] * s, from[1] - along[1] * s, from[2] - along[2] * s};
+    return dot3(q, q);
+  };
+  return std::min({segment(ap, t.ab), segment(ap, t.ac), segment(bp, bc)});
+}
+
 /// Lowers (best, best_id) to the closest of the triangles cand[0, nc) to p (squared distance,
 /// ties to the smaller index), exactly as measuring each with point_triangle_distance2f() would,
 /// but cheaper: the triangles p projects into are measured first (their distance is the
@@ -139,7 +155,8 @@ inline void lower_to_closest(const float (&p)[3], const std::int32_t* cand, int 
     // voxels^2); NaN bounds (degenerate triangles) fail the test and are measured.
     if (bound[r] > best * 1.00001f + 1e-3f) continue;
     const std::int32_t id = cand[later[r]];
-    const float d2 = point_triangle_distance2f(p, tris[std::size_t(id)]);
+    float d2 = point_triangle_distance2f(p, tris[std::size_t(id)]);
+    if (d2 != d2) d2 = edges_distance2f(p, tris[std::size_t(id)]);  // NaN: degenerate in float
     if (d2 < best || (d2 == best && id < best_id)) {
       best = d2;
       best_id = id;

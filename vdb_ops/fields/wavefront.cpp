@@ -435,6 +435,7 @@ void Wavefront::measure_front(std::size_t li, const std::uint16_t (&halo)[10][10
           }
         }
         lower_to_closest(p, cand, nc, tris_, best, best_id);
+        if (best_id < 0) continue;  // no finite distance (not expected): never accepted
         own[pos] = best_id;
         phi[pos] = out ? std::sqrt(best) * h : -std::sqrt(best) * h;
         tn[x] |= bit;
