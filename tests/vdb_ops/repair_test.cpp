@@ -310,8 +310,9 @@ TEST(Repair, TwentyRandomDefectMixesGiveValidSurfaces) {
     // Flipped faces and seams alone are mended as the file is loaded, and folds that happen not
     // to cross anything are no defect: such a mix may load; any other is refused.
     if (!std::all_of(defects.begin(), defects.end(),
-                     [](int d) { return d == 1 || d == 3 || d == 6; }))
+                     [](int d) { return d == 1 || d == 3 || d == 6; })) {
       EXPECT_THROW(make_surface(soup, "mix"), InputError) << mix << what;
+    }
     const Repaired r = repair(soup, 32);  // \throw InternalError if the result did not validate
     EXPECT_GT(r.surface.stats.enclosed_volume, 0.0) << mix << what;
     std::vector<Vec3d> some;  // every 4th repaired vertex, against every input triangle
