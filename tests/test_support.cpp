@@ -498,8 +498,8 @@ SurfaceMesh with_vertices_near_edge_ends(const SurfaceMesh& mesh, std::size_t ev
   out.triangles.clear();
   for (const Triangle& tri : mesh.triangles) {
     int k = 0;
-    while (k < 3 && !chain.count({std::min(tri[k], tri[(k + 1) % 3]),
-                                  std::max(tri[k], tri[(k + 1) % 3])}))
+    while (k < 3 &&
+           !chain.count({std::min(tri[k], tri[(k + 1) % 3]), std::max(tri[k], tri[(k + 1) % 3])}))
       ++k;
     if (k == 3) {
       out.triangles.push_back(tri);
@@ -508,7 +508,8 @@ SurfaceMesh with_vertices_near_edge_ends(const SurfaceMesh& mesh, std::size_t ev
     const std::uint32_t a = tri[k], b = tri[(k + 1) % 3], c = tri[(k + 2) % 3];
     std::vector<std::uint32_t> ids = chain[{std::min(a, b), std::max(a, b)}];
     if (ids.front() != a) std::reverse(ids.begin(), ids.end());
-    for (std::size_t i = 0; i + 1 < ids.size(); ++i) out.triangles.push_back({ids[i], ids[i + 1], c});
+    for (std::size_t i = 0; i + 1 < ids.size(); ++i)
+      out.triangles.push_back({ids[i], ids[i + 1], c});
   }
   return out;
 }

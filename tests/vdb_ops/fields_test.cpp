@@ -353,8 +353,8 @@ TEST(FieldsSliver, TrianglesDegenerateInFloatGetDistancesAndTheFillEnds) {
     const Vec3d p = fields->voxel_center(i, j, k);
     double d2 = std::numeric_limits<double>::infinity();
     for (const Triangle& t : mesh.triangles)
-      d2 = std::min(d2, point_triangle_distance2(p, mesh.points[t[0]], mesh.points[t[1]],
-                                                 mesh.points[t[2]]));
+      d2 = std::min(
+          d2, point_triangle_distance2(p, mesh.points[t[0]], mesh.points[t[1]], mesh.points[t[2]]));
     worst = std::max(worst, std::abs(-fields->phi_at_voxel(i, j, k) - std::sqrt(d2)));
     ++checked;
   });
