@@ -613,7 +613,7 @@ void register_options(CLI::App& app, CliOptions& opt) {
       ->group(th);
   app.add_option("--min-quality", opt.shell.validity.min_quality,
                  "Step inner vertices back from tets of a lower volume-length quality, where they "
-                 "can move (0: only from inverted ones)")
+                 "can move (less on sliver faces; 0: only from inverted ones)")
       ->check(CLI::Range(0.0, 0.5))
       ->group(th);
   app.add_option("--layers", opt.shell.validity.layers,

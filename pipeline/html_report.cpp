@@ -512,6 +512,8 @@ std::string report_html(const ShellResult& r, const ReportFiles& files, double r
                    num(r.quality.coverage, 4));
     }
     h << row("cap faces / floor drops", count_of(v.cap_faces) + " / " + count_of(v.floor_drops));
+    if (v.following_vertices)
+      h << row("following an edge's end", count_of(v.following_vertices) + " vertices");
     h << "</table></div>\n";
   }
 

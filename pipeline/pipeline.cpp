@@ -366,6 +366,7 @@ ShellResult run(const LoadedSurface& surface, const ShellOptions& options,
     r.validity.sectors = split.sectors;
     r.validity.on_surface_vertices = valid.on_surface.size();
     r.validity.cap_faces = valid.cap_faces;
+    r.validity.following_vertices = valid.followers;
     r.validity.floor_drops = valid.floor_drops;
     r.validity.floor_valid = valid.floor_valid;
     r.validity.seconds = valid.seconds;
@@ -619,6 +620,7 @@ std::string report_json(const ShellResult& r, const ReportFiles& files, double r
                      {"sectors", v.sectors},
                      {"gap_tets", v.gap_tets},
                      {"on_surface_vertices", v.on_surface_vertices},
+                     {"following_vertices", v.following_vertices},
                      {"cap_faces", v.cap_faces},
                      {"floor_drops", v.floor_drops},
                      {"floor_valid", v.floor_valid},

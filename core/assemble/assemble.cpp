@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <utility>
 
 #include "core/assemble/quality.h"
 #include "core/base/errors.h"
@@ -143,6 +144,13 @@ AssembleResult assemble_shell(const SurfaceMesh& surface, const ShellInput& inpu
     throw InputError("assemble_shell: " + std::to_string(input.inner_id.size()) +
                      " inner ids for " + std::to_string(n_surface) +
                      " surface vertices; give one inner id per surface vertex");
+  if (!input.split_order.empty()) {
+    std::vector<char> seen(n_surface, 0);
+    for (const std::uint32_t k : input.split_order)
+      if (input.split_order.size() != n_surface || k >= n_surface || std::exchange(seen[k], 1))
+        throw InputError("assemble_shell: the split order is not a permutation of the " +
+                         std::to_string(n_surface) + " surface vertices; give one or none");
+  }
   std::size_t off_surface = 0;
   for (const std::uint32_t i : input.inner_id) off_surface += i != kOnSurface;
   const std::size_t n_points =
@@ -238,6 +246,12 @@ AssembleResult assemble_shell(const SurfaceMesh& surface, const ShellInput& inpu
   mesh.source_triangle.reserve(max_tets);
   mesh.layer.reserve(max_tets);
   std::vector<std::uint32_t> levels(3 * static_cast<std::size_t>(layers + 1));
+  // With a split order: each prism's corners as keys ordered as the validity search's ids
+  // (its LocalPrism): the order o(v) for a surface vertex, the inner point's own index (the
+  // search numbers its slots in that order), 2n + (layers - 1) o(v) + k - 1 for a layer point.
+  const std::vector<std::uint32_t>& order = input.split_order;
+  const auto n = static_cast<std::uint32_t>(n_surface);
+  std::vector<std::uint32_t> keys(order.empty() ? 0 : levels.size());
   for (std::size_t f = 0; f < n_faces; ++f) {
     const Triangle& tri = surface.triangles[f];
     const std::uint32_t a = tri[0], b = tri[1], c = tri[2];
@@ -265,11 +279,30 @@ AssembleResult assemble_shell(const SurfaceMesh& surface, const ShellInput& inpu
       for (int k = 1; k < layers; ++k)
         levels[3 * k + c] = layer_point[v] == UINT32_MAX ? v : layer_point[v] + k - 1;
     }
-    const int dropped = split_layered_prism(levels.data(), layers, [&](const Tet& t, int layer) {
+    const auto emit = [&](const Tet& t, int layer) {
       mesh.tets.push_back(t);
       mesh.source_triangle.push_back(static_cast<std::uint32_t>(f));
       mesh.layer.push_back(static_cast<std::uint8_t>(layer));
-    });
+    };
+    int dropped = 0;
+    if (order.empty()) {
+      dropped = split_layered_prism(levels.data(), layers, emit);
+    } else {  // split the keys in the given order, emit the points they stand for
+      for (int c = 0; c < 3; ++c) {
+        const std::uint32_t v = tri[c];
+        const std::uint32_t i = input.inner_id[v];
+        keys[c] = order[v];
+        keys[3 * layers + c] = i == kOnSurface ? order[v] : levels[3 * layers + c];
+        for (int k = 1; k < layers; ++k)
+          keys[3 * k + c] = i == kOnSurface ? order[v] : 2 * n + (layers - 1) * order[v] + k - 1;
+      }
+      dropped = split_layered_prism(keys.data(), layers, [&](const Tet& key_tet, int layer) {
+        Tet t;
+        for (int k = 0; k < 4; ++k)
+          t[k] = levels[std::find(keys.begin(), keys.end(), key_tet[k]) - keys.begin()];
+        emit(t, layer);
+      });
+    }
     result.dropped_degenerate_tets += static_cast<std::size_t>(dropped);
   }
   if (options.compute_quality) mesh.quality = tet_qualities(mesh);

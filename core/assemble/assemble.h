@@ -7,7 +7,8 @@
 // index, so the two prisms sharing a quad always cut it the same way and the tet mesh is
 // conforming. The smallest index of the whole prism lies on two of its quads, whose diagonals
 // both start at it; the three diagonals therefore never form a cycle and a 3-tet split always
-// exists (split_prism() below lists the cases).
+// exists (split_prism() below lists the cases). Any order of the vertices serves as well as
+// their indices: with ShellInput::split_order, assemble_shell() follows that order instead.
 //
 // Welding: several surface vertices may share one inner vertex. Tets whose four vertices are
 // then no longer distinct are dropped (Dompierre et al.'s post-processing); a prism whose three

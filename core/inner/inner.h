@@ -32,6 +32,11 @@ struct ShellInput {
   /// face's prism is the single tet from the face to that point (ascending faces).
   std::vector<std::uint32_t> cap_faces;
   std::vector<Vec3d> cap_points;  ///< one per cap face, after inner_points in the tet mesh
+  /// Empty, or per surface vertex its place in the order the prisms' global-index rule follows
+  /// instead of the vertex order (a permutation; assemble.h): the validity search places a
+  /// vertex that follows an edge's end right after it, so that the sliver prisms between them
+  /// cut their two nearly coincident side quads alike.
+  std::vector<std::uint32_t> split_order;
 };
 
 /// inner_id of a vertex that is its own inner vertex: the shell has zero thickness there and its

@@ -26,6 +26,108 @@ namespace {
 /// face plane) are bent towards the most inward direction.
 constexpr double kMinMargin = 0.1;
 
+/// Vertices joined by edges no longer than this fraction of the longest edge at each end form
+/// a cluster (a vertex inserted on an edge next to its end, as T-junction repairs and CAD exports
+/// leave, or several). Every other member m of a cluster follows its root a (its smallest
+/// vertex) and a vertex b next to the cluster when m lies on the segment ab: its inner vertex is
+/// a' + lambda (b' - a'), never a trace of its own. The sliver faces (a, m, c) then have the
+/// inner faces (a', m', c'), lambda times the inner face (a', b', c') of the face the cluster
+/// stands in for, never flipped when that one is not. An own trace would cross a's over such a
+/// short edge, and the edge's floors would fall below the zero-volume tolerance.
+constexpr double kClusterEdge = 1e-2;
+/// m follows a and b when lambda <= this and m lies within kFollowOffLine * lambda |ab| of the
+/// line through a and b.
+constexpr double kFollowEnd = 1e-2;
+constexpr double kFollowOffLine = 1e-2;
+
+/// Faces of a lower shape quality are slivers (ShellSearch::quality_demand()).
+constexpr double kSliverShape = 0.1;
+
+/// The vertices of a follower's inner vertex: lambda along a' -> b' (a.k.a. m' above).
+struct Leaders {
+  std::uint32_t a = UINT32_MAX, b = UINT32_MAX;
+  double lambda = 0;
+};
+
+/// Per vertex of `surface`: its leaders, or none (a = UINT32_MAX); empty when no vertex follows.
+/// Leaders are roots of clusters or vertices in none, so no follower leads. Sectors
+/// (`start.constraints`) belong to no cluster.
+std::vector<Leaders> find_followers(const SurfaceMesh& surface, const IndexLists& faces,
+                                    const InnerVertices& start) {
+  const auto n = static_cast<std::uint32_t>(surface.points.size());
+  const auto sector = [&](std::uint32_t v) {
+    return v < start.constraints.size() && !start.constraints[v].empty();
+  };
+  std::vector<double> longest(n, 0.0);  // squared
+  for (const Triangle& tri : surface.triangles)
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t u = tri[k], w = tri[(k + 1) % 3];
+      const double l2 = norm2(surface.points[w] - surface.points[u]);
+      longest[u] = std::max(longest[u], l2);
+      longest[w] = std::max(longest[w], l2);
+    }
+  // Clusters: union-find over the short edges, each rooted at its smallest vertex.
+  std::vector<std::uint32_t> root;
+  const auto find = [&](std::uint32_t v) {
+    while (root[v] != v) v = root[v] = root[root[v]];
+    return v;
+  };
+  for (const Triangle& tri : surface.triangles)
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t u = tri[k], w = tri[(k + 1) % 3];
+      const double l2 = norm2(surface.points[w] - surface.points[u]);
+      if (!(l2 <= kClusterEdge * kClusterEdge * std::min(longest[u], longest[w])) || sector(u) ||
+          sector(w))
+        continue;
+      if (root.empty()) {
+        root.resize(n);
+        std::iota(root.begin(), root.end(), 0u);
+      }
+      const std::uint32_t ru = find(u), rw = find(w);
+      root[std::max(ru, rw)] = std::min(ru, rw);
+    }
+  if (root.empty()) return {};
+  for (std::uint32_t v = 0; v < n; ++v) root[v] = find(v);
+  IndexLists members;
+  members.build(n, [&](const auto& emit) {
+    for (std::uint32_t v = 0; v < n; ++v) emit(root[v], v);
+  });
+  std::vector<Leaders> out(n);
+  std::vector<std::uint32_t> around;
+  bool any = false;
+  for (std::uint32_t a = 0; a < n; ++a) {
+    const auto cluster = members[a];
+    if (root[a] != a || cluster.end() - cluster.begin() < 2) continue;
+    around.clear();  // the roots of the vertices next to the cluster
+    for (const std::uint32_t m : cluster)
+      for (const std::uint32_t f : faces[m])
+        for (const std::uint32_t u : surface.triangles[f])
+          if (root[u] != a) around.push_back(root[u]);
+    std::sort(around.begin(), around.end());
+    around.erase(std::unique(around.begin(), around.end()), around.end());
+    const Vec3d& pa = surface.points[a];
+    for (const std::uint32_t m : cluster) {
+      if (m == a) continue;
+      double best_off = std::numeric_limits<double>::infinity();
+      for (const std::uint32_t b : around) {
+        const Vec3d& pb = surface.points[b];
+        const double l2 = norm2(pb - pa);
+        const double lambda = l2 > 0 ? dot(surface.points[m] - pa, pb - pa) / l2 : 0.0;
+        if (!(lambda > 0 && lambda <= kFollowEnd)) continue;
+        const double off =
+            distance(surface.points[m], pa + (pb - pa) * lambda) / (lambda * std::sqrt(l2));
+        if (off <= kFollowOffLine && off < best_off) {
+          best_off = off;
+          out[m] = {a, b, lambda};
+          any = true;
+        }
+      }
+    }
+  }
+  if (!any) out.clear();
+  return out;
+}
+
 /// Per-vertex state of the search.
 struct State {
   std::vector<double> t;     ///< current arc length; 0: on the surface (folded vertices)
@@ -44,23 +146,60 @@ class ShellSearch {
     cached_t_.assign(n, -1.0);
     drops_.assign(n, 0);
     cached_position_.resize(n);
+    faces_.build(n, [&](const auto& emit) {
+      for (std::uint32_t f = 0; f < surface.triangles.size(); ++f)
+        for (std::uint32_t v : surface.triangles[f]) emit(v, f);
+    });
+    leaders_ = find_followers(surface, faces_, start);
+    if (!leaders_.empty()) {  // the split order: each cluster's followers right after its root
+      IndexLists followers;
+      followers.build(n, [&](const auto& emit) {
+        for (std::uint32_t v = 0; v < n; ++v)
+          if (follows(v)) emit(leaders_[v].a, v);
+      });
+      sequence_.reserve(n);
+      for (std::uint32_t v = 0; v < n; ++v) {
+        if (follows(v)) continue;
+        sequence_.push_back(v);
+        sequence_.insert(sequence_.end(), followers[v].begin(), followers[v].end());
+      }
+      order_.resize(n);
+      for (std::uint32_t k = 0; k < n; ++k) order_[sequence_[k]] = k;
+    }
+    // A leader's floor ignores its edges to followers (they are the short ones); every move of
+    // a leader settles its followers' prisms too.
     std::vector<Vec3d> normal(n);
+    std::vector<double> any_edge(n, std::numeric_limits<double>::infinity());
     for (std::size_t f = 0; f < surface.triangles.size(); ++f) {
       const Triangle& tri = surface.triangles[f];
       const Vec3d nf = face_normal_area(surface, f);
       for (int k = 0; k < 3; ++k) {
         normal[tri[k]] += nf;
-        const double l = distance(surface.points[tri[k]], surface.points[tri[(k + 1) % 3]]);
-        floor_[tri[k]] = std::min(floor_[tri[k]], l);
-        floor_[tri[(k + 1) % 3]] = std::min(floor_[tri[(k + 1) % 3]], l);
+        const std::uint32_t u = tri[k], w = tri[(k + 1) % 3];
+        const double l = distance(surface.points[u], surface.points[w]);
+        if (follows(u) || !follows(w)) floor_[u] = std::min(floor_[u], l);
+        if (follows(w) || !follows(u)) floor_[w] = std::min(floor_[w], l);
+        any_edge[u] = std::min(any_edge[u], l);
+        any_edge[w] = std::min(any_edge[w], l);
       }
     }
+    for (std::size_t v = 0; v < n; ++v)  // only followers around: their edges after all
+      if (std::isinf(floor_[v])) floor_[v] = any_edge[v];
+    if (!leaders_.empty())
+      faces_.build(n, [&](const auto& emit) {
+        for (std::uint32_t f = 0; f < surface.triangles.size(); ++f)
+          for (std::uint32_t v : surface.triangles[f]) {
+            emit(v, f);
+            if (follows(v))
+              for_each_mover(v, [&](std::uint32_t u) {
+                if (std::find(surface.triangles[f].begin(), surface.triangles[f].end(), u) ==
+                    surface.triangles[f].end())
+                  emit(u, f);
+              });
+          }
+      });
     groups_.build(start.input.inner_points.size(), [&](const auto& emit) {
       for (std::uint32_t v = 0; v < n; ++v) emit(start.input.inner_id[v], v);
-    });
-    faces_.build(n, [&](const auto& emit) {
-      for (std::uint32_t f = 0; f < surface.triangles.size(); ++f)
-        for (std::uint32_t v : surface.triangles[f]) emit(v, f);
     });
     std::vector<std::vector<Vec3d>> face_normals(n);
     for (std::size_t f = 0; f < surface.triangles.size(); ++f)
@@ -79,6 +218,7 @@ class ShellSearch {
       // along its first step, or inward along the vertex normal for a trace that never moved.
       fallback_[v] = traces.end[v] > 0 ? normalized(traces.sample(v, 1) - traces.sample(v, 0))
                                        : -normalized(normal[v]);
+      if (follows(static_cast<std::uint32_t>(v))) continue;  // placed by its leaders
       // The first direction must point inward for every incident face, with a margin, or the
       // thinnest shell already folds: bend the start of such a trace (within the floor depth)
       // into the most inward direction.
@@ -157,6 +297,31 @@ class ShellSearch {
     return v < start_.constraints.size() && !start_.constraints[v].empty();
   }
 
+  /// How many vertices follow leaders.
+  std::size_t followers() const {
+    return static_cast<std::size_t>(std::count_if(
+        leaders_.begin(), leaders_.end(), [](const Leaders& l) { return l.a != UINT32_MAX; }));
+  }
+  /// Whether v follows leaders (find_followers()): its inner vertex is theirs, interpolated.
+  bool follows(std::uint32_t v) const { return !leaders_.empty() && leaders_[v].a != UINT32_MAX; }
+  /// Calls f(u) for each vertex whose depth places v's inner vertex: v, or its two leaders.
+  template <class F>
+  void for_each_mover(std::uint32_t v, const F& f) const {
+    if (!follows(v)) return f(v);
+    f(leaders_[v].a);
+    f(leaders_[v].b);
+  }
+  /// How deep v's inner vertex can still move back: a welded group's depth, t_v above the
+  /// floor, 0 at the floor or on the surface; a follower's, its deeper leader's.
+  double depth(const State& s, std::uint32_t v) const {
+    double d = 0;
+    for_each_mover(v, [&](std::uint32_t u) {
+      d = std::max(d, s.welded[u] ? group_depth_[start_.input.inner_id[u]]
+                                  : (s.t[u] > floor_[u] ? s.t[u] : 0.0));
+    });
+    return d;
+  }
+
   /// Vertices kept on the surface (t_v = 0): those whose incident faces admit no common inward
   /// direction, and sectors given up by keep_on_surface(); ascending.
   const std::vector<std::uint32_t>& folded() const { return folded_; }
@@ -178,6 +343,8 @@ class ShellSearch {
       s.t[v] = 0;
       s.welded[v] = 0;
     }
+    for (std::uint32_t v = 0; v < leaders_.size(); ++v)
+      if (follows(v)) s.welded[v] = 0;  // t_v stays its full depth: never read, never moved
     // A weld group is one slot, ordered by its smallest welded member, until it unwelds whole.
     // Its depth, the deepest welded member's, holds as long: welded members do not move.
     group_key_.assign(groups_.start.size() - 1, UINT32_MAX);
@@ -192,9 +359,10 @@ class ShellSearch {
   }
 
   /// Prism f as assemble_shell() would build it from build(s): ids in the same order as the
-  /// assembled mesh's (all the splits depend on) — ids[3 k + c] is corner c at layer boundary k
-  /// (surface vertex v, inner vertex n + its group's key or n + v, layer point 2n +
-  /// (layers - 1) v + k - 1) — their positions, and its tets.
+  /// assembled mesh's split keys (all the splits depend on; ShellInput::split_order) —
+  /// ids[3 k + c] is corner c at layer boundary k (surface vertex v: o(v), inner vertex
+  /// n + o(its group's key) or n + o(v), layer point 2n + (layers - 1) o(v) + k - 1, with o(v)
+  /// = order(v)) — their positions, and its tets.
   struct LocalPrism {
     std::uint32_t face = 0;
     std::vector<std::uint32_t> ids;
@@ -208,6 +376,45 @@ class ShellSearch {
     }
     std::array<Vec3d, 4> corners(std::size_t i) const { return corners(tets[i]); }
   };
+  /// v's place in the order the prism splits follow (ShellInput::split_order).
+  std::uint32_t order(std::uint32_t v) const { return order_.empty() ? v : order_[v]; }
+
+  /// v's inner vertex in `s`: its id in LocalPrism's numbering (below n: on the surface) and its
+  /// position. A follower's is on its leaders' (on the surface when both of theirs are, theirs
+  /// when they share one: then returns the leader a, else UINT32_MAX).
+  std::uint32_t inner_vertex(const State& s, std::uint32_t v, std::uint32_t& id, Vec3d& at) const {
+    const auto n = static_cast<std::uint32_t>(full_.size());
+    if (follows(v)) {
+      const Leaders& l = leaders_[v];
+      std::uint32_t ia = 0, ib = 0;
+      Vec3d pa, pb;
+      inner_vertex(s, l.a, ia, pa);
+      inner_vertex(s, l.b, ib, pb);
+      if (ia < n && ib < n) {
+        id = order(v);
+        at = surface_.points[v];
+      } else if (ia == ib) {  // one weld group: a separate point there would coincide
+        id = ia;
+        at = pa;
+        return l.a;
+      } else {
+        id = n + order(v);
+        at = pa + (pb - pa) * l.lambda;
+      }
+    } else if (s.t[v] == 0) {
+      id = order(v);
+      at = surface_.points[v];
+    } else if (s.welded[v]) {
+      const std::uint32_t g = start_.input.inner_id[v];
+      id = n + order(group_key_[g]);
+      at = start_.input.inner_points[g];
+    } else {
+      id = n + order(v);
+      at = cached_position(v, s.t[v]);
+    }
+    return UINT32_MAX;
+  }
+
   /// Fills `p` with prism f of state `s` (its buffers are reused).
   void prism(const State& s, std::uint32_t f, LocalPrism& p) const {
     const auto n = static_cast<std::uint32_t>(full_.size());
@@ -221,24 +428,14 @@ class ShellSearch {
     for (int c = 0; c < 3; ++c) {
       const std::uint32_t v = tri[c];
       const Vec3d& sv = surface_.points[v];
-      p.ids[c] = v;
+      p.ids[c] = order(v);
       p.at[c] = sv;
       std::uint32_t& inner = p.ids[3 * K + c];
       Vec3d& inner_at = p.at[3 * K + c];
-      if (s.t[v] == 0) {
-        inner = v;
-        inner_at = sv;
-      } else if (s.welded[v]) {
-        const std::uint32_t g = start_.input.inner_id[v];
-        inner = n + group_key_[g];
-        inner_at = start_.input.inner_points[g];
-      } else {
-        inner = n + v;
-        inner_at = cached_position(v, s.t[v]);
-      }
+      inner_vertex(s, v, inner, inner_at);
       for (int k = 1; k < K; ++k) {
         const std::size_t at = 3 * static_cast<std::size_t>(k) + c;
-        p.ids[at] = s.t[v] == 0 ? v : 2 * n + (K - 1) * v + k - 1;
+        p.ids[at] = inner < n ? inner : 2 * n + (K - 1) * order(v) + k - 1;
         p.at[at] = sv + (inner_at - sv) * layer_at_[k];
       }
     }
@@ -263,13 +460,13 @@ class ShellSearch {
     for (const std::uint32_t id : tet) {  // inner and layer points move with their vertex
       if (id < n) continue;
       const auto corner = (std::find(p.ids.begin() + 3, p.ids.end(), id) - p.ids.begin()) % 3;
-      const std::uint32_t v = tri[corner];
-      const double d = s.welded[v] ? group_depth_[start_.input.inner_id[v]]
-                                   : (s.t[v] > floor_[v] ? s.t[v] : 0.0);
-      if (d > best_depth) {
-        best_depth = d;
-        best = v;
-      }
+      for_each_mover(tri[corner], [&](std::uint32_t v) {
+        const double d = depth(s, v);
+        if (d > best_depth) {
+          best_depth = d;
+          best = v;
+        }
+      });
     }
     return best;
   }
@@ -279,6 +476,13 @@ class ShellSearch {
   /// returns how many left their weld.
   template <class Moved>
   std::size_t step_back(State& s, std::uint32_t v, double shrink, const Moved& moved) const {
+    if (follows(v)) {  // the vertices that move it and can
+      std::size_t unwelded = 0;
+      for_each_mover(v, [&](std::uint32_t u) {
+        if (depth(s, u) > 0) unwelded += step_back(s, u, shrink, moved);
+      });
+      return unwelded;
+    }
     if (!s.welded[v]) {
       s.t[v] = std::max(floor_[v], s.t[v] * shrink);
       moved(v);
@@ -354,6 +558,7 @@ class ShellSearch {
   void for_each_unsettled_tet(const LocalPrism& p, double zero_volume_tolerance, double min_quality,
                               const Visit& visit) const {
     const bool whole = layers_ == 1 || p.cap;  // p.tets are the prism's own 3 tets
+    if (min_quality > 0) min_quality *= quality_demand(p.face);
     const double quality = whole ? min_quality : min_quality / layers_;
     for (const Tet& t : p.tets) {
       const std::array<Vec3d, 4> c = p.corners(t);
@@ -369,6 +574,19 @@ class ShellSearch {
       const std::array<Vec3d, 4> c = p.corners(own.tets[i]);
       if (tet_quality(c[0], c[1], c[2], c[3]) < min_quality && visit(own.tets[i])) return;
     }
+  }
+
+  /// The share of --min-quality a prism on face f is settled to: 1, or on a sliver face its shape
+  /// quality q (4 sqrt(3) area / sum of its squared edges, 1 for an equilateral triangle) over
+  /// kSliverShape. No tet on a sliver is much better than the face, whatever the depth: stepping
+  /// back to reach a quality it cannot have would only thin the shell around it.
+  double quality_demand(std::uint32_t f) const {
+    const Triangle& tri = surface_.triangles[f];
+    const Vec3d &a = surface_.points[tri[0]], &b = surface_.points[tri[1]],
+                &c = surface_.points[tri[2]];
+    const double edges = norm2(b - a) + norm2(c - b) + norm2(a - c);
+    const double shape = edges > 0 ? 2 * std::sqrt(3.0) * norm(cross(b - a, c - a)) / edges : 0;
+    return std::min(1.0, shape / kSliverShape);
   }
 
   /// Whether for_each_unsettled_tet() visits a tet of `p`.
@@ -389,11 +607,12 @@ class ShellSearch {
                     double zero_volume_tolerance, double min_quality) const {
     const auto send_back = [&](const LocalPrism& p, const auto& again) {
       if (!has_unsettled_tet(p, zero_volume_tolerance, min_quality)) return;
-      for (const std::uint32_t v : surface_.triangles[p.face]) {
-        if (s.t[v] == before[v]) continue;
-        s.t[v] = before[v];
-        again(v);
-      }
+      for (const std::uint32_t corner : surface_.triangles[p.face])
+        for_each_mover(corner, [&](std::uint32_t v) {
+          if (s.t[v] == before[v]) return;
+          s.t[v] = before[v];
+          again(v);
+        });
     };
     for_each_queued_prism(s, std::move(queue), zero_volume_tolerance, min_quality, send_back);
   }
@@ -523,8 +742,22 @@ class ShellSearch {
     in.inner_id.resize(n);
     in.inner_points.reserve(n);
     std::vector<std::uint32_t> group_slot(start_.input.inner_points.size(), UINT32_MAX);
-    for (std::uint32_t v = 0; v < n; ++v) {
-      if (s.t[v] == 0) {
+    // Slots in the split order: the inner points' indices then order them as the search's ids.
+    for (std::uint32_t k = 0; k < n; ++k) {
+      const std::uint32_t v = sequence_.empty() ? k : sequence_[k];
+      if (follows(v)) {
+        std::uint32_t id = 0;
+        Vec3d at;
+        const std::uint32_t shared = inner_vertex(s, v, id, at);
+        if (id < n) {
+          in.inner_id[v] = kOnSurface;
+        } else if (shared != UINT32_MAX) {  // placed before v: it follows its leader a
+          in.inner_id[v] = in.inner_id[shared];
+        } else {
+          in.inner_id[v] = static_cast<std::uint32_t>(in.inner_points.size());
+          in.inner_points.push_back(at);
+        }
+      } else if (s.t[v] == 0) {
         in.inner_id[v] = kOnSurface;
       } else if (s.welded[v]) {
         const std::uint32_t g = start_.input.inner_id[v];
@@ -540,6 +773,7 @@ class ShellSearch {
     }
     in.cap_faces = caps_.cap_faces;
     in.cap_points = caps_.cap_points;
+    in.split_order = order_;
     members.build(in.inner_points.size(), [&](const auto& emit) {
       for (std::uint32_t v = 0; v < n; ++v)
         if (in.inner_id[v] != kOnSurface) emit(in.inner_id[v], v);
@@ -555,15 +789,18 @@ class ShellSearch {
   std::vector<double> full_, floor_;
   std::vector<double> limit_;  ///< per vertex: InnerVertices::limit (infinity: none)
   std::vector<Vec3d> fallback_, correction_;
-  IndexLists groups_;                       ///< start weld group -> its vertices
-  std::vector<std::uint32_t> group_key_;    ///< per group: its smallest welded vertex (initial)
-  std::vector<double> group_depth_;         ///< per group: its welded members' largest depth
-  IndexLists faces_;                        ///< vertex -> its faces
-  std::vector<std::uint32_t> folded_;       ///< on the surface (t_v = 0), ascending
-  double floor_fraction_ = 0;               ///< ValidityOptions::floor_fraction
-  double floor_drop_ = 1;                   ///< ValidityOptions::floor_drop
-  int layers_ = 1;                          ///< ValidityOptions::layers
-  std::vector<double> layer_at_;            ///< layer_fractions() of the layers
+  IndexLists groups_;                     ///< start weld group -> its vertices
+  std::vector<std::uint32_t> group_key_;  ///< per group: its smallest welded vertex (initial)
+  std::vector<double> group_depth_;       ///< per group: its welded members' largest depth
+  IndexLists faces_;                      ///< vertex -> its faces (a leader's: its followers' too)
+  std::vector<Leaders> leaders_;          ///< find_followers()
+  std::vector<std::uint32_t> order_;      ///< ShellInput::split_order (empty: no followers)
+  std::vector<std::uint32_t> sequence_;   ///< the vertices in the split order
+  std::vector<std::uint32_t> folded_;     ///< on the surface (t_v = 0), ascending
+  double floor_fraction_ = 0;             ///< ValidityOptions::floor_fraction
+  double floor_drop_ = 1;                 ///< ValidityOptions::floor_drop
+  int layers_ = 1;                        ///< ValidityOptions::layers
+  std::vector<double> layer_at_;          ///< layer_fractions() of the layers
   std::map<std::uint32_t, int> cap_drops_;  ///< per cap face: how often its depth was dropped
   std::vector<int> drops_;                  ///< per vertex: how often its floor was lowered
   ShellInput caps_;                         ///< cap_faces and cap_points only
@@ -687,14 +924,16 @@ bool drop_floors(ShellSearch& search, State& s, const SurfaceMesh& surface, cons
                  std::uint32_t n_slots, const ValidityOptions& options, std::vector<char>& lowered,
                  std::size_t& floor_drops) {
   bool dropped = false;
-  auto drop = [&](std::uint32_t v) {
-    if (lowered[v] || s.t[v] == 0 ||
-        !search.lower_floor(v, options.floor_drop, options.max_floor_drops))
-      return;
-    lowered[v] = 1;
-    s.t[v] = search.floor()[v];
-    ++floor_drops;
-    dropped = true;
+  auto drop = [&](std::uint32_t corner) {
+    search.for_each_mover(corner, [&](std::uint32_t v) {
+      if (lowered[v] || s.t[v] == 0 ||
+          !search.lower_floor(v, options.floor_drop, options.max_floor_drops))
+        return;
+      lowered[v] = 1;
+      s.t[v] = search.floor()[v];
+      ++floor_drops;
+      dropped = true;
+    });
   };
   for (const auto& [f, g] : prism_pairs)
     for (const std::uint32_t face : {f, g})
@@ -747,11 +986,13 @@ void give_back(const ShellSearch& search, const SurfaceMesh& surface, State& s,
       const PointSlots slot_of(surface, out.input, mesh);
       std::vector<char> sent(n, 0);
       bool moved = false;
-      const auto send_back = [&](std::uint32_t v) {
-        if (s.t[v] == before[v]) return;
-        s.t[v] = before[v];
-        sent[v] = 1;
-        moved = true;
+      const auto send_back = [&](std::uint32_t corner) {
+        search.for_each_mover(corner, [&](std::uint32_t v) {
+          if (s.t[v] == before[v]) return;
+          s.t[v] = before[v];
+          sent[v] = 1;
+          moved = true;
+        });
       };
       const auto send_face = [&](std::uint32_t f) {
         for (const std::uint32_t v : surface.triangles[f]) send_back(v);
@@ -844,17 +1085,18 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
       auto slot_depth = [&](std::uint32_t slot) {
         double d = 0;
         if (slot >= n_slots) return d;  // not an inner slot: nothing to move
-        for (std::uint32_t v : members[slot])
-          if (s.welded[v] || s.t[v] > search.floor()[v]) d = std::max(d, s.t[v]);
+        for (std::uint32_t v : members[slot]) d = std::max(d, search.depth(s, v));
         return d;  // 0: every member at its floor, nothing to move
       };
       auto lower = [&](std::uint32_t slot) {  // a welded slot leaves its weld whole
-        for (std::uint32_t v : members[slot])
-          if (!lowered[v])
-            out.unwelded += search.step_back(s, v, options.shrink, [&](std::uint32_t u) {
-              lowered[u] = 1;
-              progress = true;
-            });
+        for (std::uint32_t member : members[slot])
+          search.for_each_mover(member, [&](std::uint32_t v) {
+            if (!lowered[v])
+              out.unwelded += search.step_back(s, v, options.shrink, [&](std::uint32_t u) {
+                lowered[u] = 1;
+                progress = true;
+              });
+          });
       };
       for (std::uint32_t t : bad_tets) {
         std::uint32_t best = UINT32_MAX;
@@ -946,12 +1188,14 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
     std::fill(lowered.begin(), lowered.end(), 0);
     bool moved = false;
     for (const std::uint32_t slot : slots)
-      for (const std::uint32_t v : members[slot])
-        if (!lowered[v] && (s.welded[v] || s.t[v] > search.floor()[v]))
-          out.unwelded += search.step_back(s, v, options.shrink, [&](std::uint32_t u) {
-            lowered[u] = 1;
-            moved = true;
-          });
+      for (const std::uint32_t member : members[slot])
+        search.for_each_mover(member, [&](std::uint32_t v) {
+          if (!lowered[v] && search.depth(s, v) > 0)
+            out.unwelded += search.step_back(s, v, options.shrink, [&](std::uint32_t u) {
+              lowered[u] = 1;
+              moved = true;
+            });
+        });
     if (!moved)  // every one at its floor (traces meeting within it): lower the floors
       moved = drop_floors(search, s, surface, out.shell.mesh,
                           PointSlots(surface, out.input, out.shell.mesh), {}, {}, slots, members,
@@ -973,6 +1217,7 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
   out.checks = check_shell(surface, out.shell.mesh, first_few);
   out.on_surface = search.folded();
   out.cap_faces = search.caps();
+  out.followers = search.followers();
   count_moved_back(search, s, out);
   ++out.checks_run;  // the final full check
   return out;

@@ -296,6 +296,26 @@ TEST(CliRepair, SeamsWrittenTwiceAreWeldedNotRebuilt) {
   EXPECT_EQ(test::read_text(dir.file("shell.ele")), test::read_text(dir.file("repaired.ele")));
 }
 
+TEST(CliInput, VerticesNextToAnEdgesEndAreShelled) {
+  // The horn with a vertex inserted on every 5th edge 1e-5 of its length from an end, written
+  // to a file and read back (exit 3 before: the inserted vertices' own traces crossed their
+  // neighbours'); the shell checked here against the surface read back.
+  TempDir dir;
+  std::vector<test::InsertedVertex> inserted;
+  const SurfaceMesh mesh =
+      test::with_vertices_near_edge_ends(make_shape("horn"), 5, 1e-5, inserted);
+  ASSERT_GE(inserted.size(), 30u);
+  const std::string in = dir.file("inserted.obj");
+  write_surface(in, mesh);
+  const InProcess r = cli({in, "-r", "48", "-o", dir.file("shell.ele")});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const SurfaceMesh read_back = load_surface(in).mesh;
+  ASSERT_EQ(read_back.points.size(), mesh.points.size());
+  const TetMesh shell = test::read_tetgen_shell(dir.file("shell.ele"));
+  EXPECT_EQ(test::independent_shell_problems(read_back, shell), "");
+  EXPECT_GT(test::independent_coverage(read_back, shell), 0.8);
+}
+
 TEST(CliInput, ANestedComponentFacingOutIsACavity) {
   // A sphere inside a sphere, both facing out (as parts are often exported): by the even-odd
   // rule the inner one bounds a cavity, so it is turned and the shell fills the space between,

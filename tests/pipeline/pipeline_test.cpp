@@ -66,6 +66,7 @@ TEST(Pipeline, ReportHasEveryDocumentedKey) {
                           "/shell/valid",
                           "/validity/rounds",
                           "/validity/on_surface_vertices",
+                          "/validity/following_vertices",
                           "/quality/min",
                           "/quality/p5",
                           "/quality/median",

@@ -540,6 +540,54 @@ TEST(Assemble, LayersKeepSurfaceVerticesAndWeldsAsOneLayerDoes) {
   EXPECT_EQ(r.on_surface_vertices, 1u);
 }
 
+TEST(Assemble, SplitOrderCutsAsTheRelabelledSurfaceDoes) {
+  // ShellInput::split_order: the global-index rule follows a given order of the surface vertices
+  // instead of their indices. The shell must be, tet for tet and corner for corner, the shell of
+  // the surface relabelled in that order (inner points numbered in it, as the search does).
+  const SurfaceMesh s = make_shape("sphere", 1);
+  const auto n = static_cast<std::uint32_t>(s.points.size());
+  std::vector<std::uint32_t> order(n);
+  for (std::uint32_t v = 0; v < n; ++v) order[v] = (v * 7 + 3) % n;  // n is not a multiple of 7
+  ASSERT_NE(n % 7, 0u);
+  const Vec3d c = centroid(s);
+  ShellInput in;  // inner point of v: slot order[v]
+  in.inner_points.resize(n);
+  in.inner_id.resize(n);
+  for (std::uint32_t v = 0; v < n; ++v) {
+    in.inner_id[v] = order[v];
+    in.inner_points[order[v]] = c + (s.points[v] - c) * 0.6;
+  }
+  in.split_order = order;
+  SurfaceMesh relabelled;
+  relabelled.points.resize(n);
+  for (std::uint32_t v = 0; v < n; ++v) relabelled.points[order[v]] = s.points[v];
+  for (const Triangle& t : s.triangles)
+    relabelled.triangles.push_back({order[t[0]], order[t[1]], order[t[2]]});
+  ShellInput relabelled_in = in;
+  relabelled_in.split_order.clear();
+  for (std::uint32_t v = 0; v < n; ++v) relabelled_in.inner_id[order[v]] = order[v];
+  for (const int layers : {1, 3}) {
+    AssembleOptions o;
+    o.layers = layers;
+    const AssembleResult a = assemble_shell(s, in, o);
+    const AssembleResult b = assemble_shell(relabelled, relabelled_in, o);
+    ASSERT_EQ(a.mesh.tets.size(), b.mesh.tets.size());
+    for (std::size_t t = 0; t < a.mesh.tets.size(); ++t)
+      for (int k = 0; k < 4; ++k)
+        ASSERT_EQ(a.mesh.points[a.mesh.tets[t][k]], b.mesh.points[b.mesh.tets[t][k]])
+            << "tet " << t << " corner " << k << ", " << layers << " layers";
+    expect_conforming_shell(s, in, assemble_shell(s, in));
+    // Not the index order's shell: the order is used.
+    ShellInput index_order = in;
+    index_order.split_order.clear();
+    EXPECT_NE(assemble_shell(s, index_order, o).mesh.tets, a.mesh.tets);
+  }
+  in.split_order[5] = in.split_order[6];  // not a permutation
+  EXPECT_THROW(assemble_shell(s, in), InputError);
+  in.split_order.pop_back();
+  EXPECT_THROW(assemble_shell(s, in), InputError);
+}
+
 TEST(Assemble, RejectsInconsistentInput) {
   const SurfaceMesh s = octahedron();
   ShellInput in = scaled_input(s, 0.5);
