@@ -187,14 +187,17 @@ std::vector<std::int64_t> position_indices(const std::vector<Vec3d>& points,
   return index;
 }
 
-/// Faces of zero area (a repeated corner, or below the area threshold); marks them.
+/// Faces of zero area (a repeated corner, or below the area threshold), which it marks, and
+/// faces with an edge below the short-edge threshold.
 void check_degenerate(const SoupFaces& f, const ValidationOptions& options,
-                      ProblemCollector& degenerate, std::vector<char>& is_degenerate) {
+                      ProblemCollector& degenerate, ProblemCollector& short_edge,
+                      std::vector<char>& is_degenerate) {
   const auto& pts = f.points();
   BBox box;
   for (const Vec3d& p : pts) box.expand(p);
   const double diag = box.diagonal();
   const double min_twice_area = 2.0 * options.degenerate_area_fraction * diag * diag;
+  const double min_edge = options.short_edge_fraction * diag;
   is_degenerate.assign(f.tris.size(), 0);
   for (std::size_t t = 0; t < f.tris.size(); ++t) {
     const Triangle& v = f.tris[t].v;
@@ -206,6 +209,17 @@ void check_degenerate(const SoupFaces& f, const ValidationOptions& options,
       degenerate.add(f.face_name(f.tris[t]) + " (" + std::to_string(v[0]) + ", " +
                      std::to_string(v[1]) + ", " + std::to_string(v[2]) + ") at " +
                      fmt_point(f.soup.points[v[0]]));
+      continue;
+    }
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t a = v[k], b = v[(k + 1) % 3];
+      const double length = distance(pts[a], pts[b]);
+      if (!(length <= min_edge)) continue;
+      char apart[32];
+      std::snprintf(apart, sizeof apart, "%.3g", length);
+      short_edge.add(f.face_name(f.tris[t]) + ": vertices " + std::to_string(a) + " and " +
+                     std::to_string(b) + ", " + apart + " apart at " + fmt_point(f.soup.points[a]));
+      break;
     }
   }
 }
@@ -565,8 +579,17 @@ std::vector<SurfaceProblem> find_surface_problems(const PolygonSoup& soup,
   const SoupFaces faces{soup, fan_triangulate(soup)};
   ProblemCollector degenerate("degenerate (zero-area) faces",
                               "remove or collapse the zero-area faces", max);
+  char fraction[32];  // 1e-9, not printf's 1e-09
+  std::snprintf(fraction, sizeof fraction, "%g", options.short_edge_fraction);
+  std::string under = fraction;
+  for (const char* zero : {"e-0", "e+0"})
+    if (const auto at = under.find(zero); at != std::string::npos) under.erase(at + 2, 1);
+  ProblemCollector short_edge("faces with an edge under " + under +
+                                  " of the bounding box diagonal (readers that weld positions "
+                                  "join its ends)",
+                              "collapse the short edges (merge each pair of vertices)", max);
   std::vector<char> is_degenerate;
-  check_degenerate(faces, options, degenerate, is_degenerate);
+  check_degenerate(faces, options, degenerate, short_edge, is_degenerate);
   ProblemCollector duplicate("duplicate faces (the corners of another face)",
                              "remove the repeated faces, or join the parts that touch face to "
                              "face",
@@ -592,7 +615,8 @@ std::vector<SurfaceProblem> find_surface_problems(const PolygonSoup& soup,
                             "--adaptivity)",
                             max);
   if (boundary.problem.count + nonmanifold_edge.problem.count + orientation.problem.count +
-          nonmanifold_vertex.problem.count + degenerate.problem.count + duplicate.problem.count ==
+          nonmanifold_vertex.problem.count + degenerate.problem.count + duplicate.problem.count +
+          short_edge.problem.count ==
       0)
     check_crossings(faces, crossing);
 
@@ -600,6 +624,7 @@ std::vector<SurfaceProblem> find_surface_problems(const PolygonSoup& soup,
   nonmanifold_edge.flush_into(problems);
   nonmanifold_vertex.flush_into(problems);
   degenerate.flush_into(problems);
+  short_edge.flush_into(problems);
   duplicate.flush_into(problems);
   orientation.flush_into(problems);
   crossing.flush_into(problems);

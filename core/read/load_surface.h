@@ -30,6 +30,10 @@ struct ValidationOptions {
   /// Faces whose area is at most this fraction of the squared bounding-box diagonal count as
   /// degenerate (zero-area).
   double degenerate_area_fraction = 1e-14;
+  /// Faces with an edge no longer than this fraction of the bounding-box diagonal are refused:
+  /// readers that weld positions within it (the independent checker does, at 1e-9) join the
+  /// edge's ends and see the face collapse. 0: no limit.
+  double short_edge_fraction = 1e-9;
 };
 
 /// Facts about a valid surface (what `vdb_shell INPUT` prints).

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "assets/shapes.h"
 #include "core/base/errors.h"
 #include "core/read/load_surface.h"
 #include "core/read/polygon_soup.h"
@@ -231,6 +232,33 @@ TEST(Validate, DegenerateAndDuplicateFaces) {
   }
   EXPECT_TRUE(degenerate);
   EXPECT_TRUE(duplicate);
+}
+
+TEST(Validate, EdgesTooShortForReadersThatWeldAreRefused) {
+  // Vertices inserted next to edge ends of a box: 5e-11 from the end (3e-11 of the diagonal)
+  // readers that weld positions within 1e-9 of the diagonal join, and the faces collapse for
+  // them; 5e-9 away they stay apart, and the surface is valid.
+  for (const double t : {1e-10, 1e-8}) {
+    std::vector<test::InsertedVertex> inserted;
+    const SurfaceMesh m = test::with_vertices_near_edge_ends(make_shape("box", 1), 5, t, inserted);
+    ASSERT_GE(inserted.size(), 5u);
+    PolygonSoup soup;
+    soup.points = m.points;
+    for (const Triangle& tri : m.triangles) soup.polygons.push_back({tri[0], tri[1], tri[2]});
+    const std::vector<SurfaceProblem> problems = find_surface_problems(soup);
+    if (t < 1e-9) {
+      ASSERT_EQ(problems.size(), 1u) << t;
+      EXPECT_TRUE(contains(problems[0].rule, "readers that weld positions")) << problems[0].rule;
+      EXPECT_TRUE(contains(problems[0].first, "vertices " + std::to_string(inserted[0].near) +
+                                                  " and " + std::to_string(inserted[0].vertex)) ||
+                  contains(problems[0].first, "vertices " + std::to_string(inserted[0].vertex) +
+                                                  " and " + std::to_string(inserted[0].near)))
+          << problems[0].first;
+      EXPECT_THROW(make_surface(soup, "short"), InputError);
+    } else {
+      EXPECT_TRUE(problems.empty()) << problems[0].rule;
+    }
+  }
 }
 
 /// cube_obj() and a second unit cube at `corner`, as one OBJ.
