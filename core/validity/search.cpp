@@ -169,7 +169,6 @@ class ShellSearch {
     // A leader's floor ignores its edges to followers (they are the short ones); every move of
     // a leader settles its followers' prisms too.
     std::vector<Vec3d> normal(n);
-    std::vector<double> any_edge(n, std::numeric_limits<double>::infinity());
     for (std::size_t f = 0; f < surface.triangles.size(); ++f) {
       const Triangle& tri = surface.triangles[f];
       const Vec3d nf = face_normal_area(surface, f);
@@ -179,12 +178,15 @@ class ShellSearch {
         const double l = distance(surface.points[u], surface.points[w]);
         if (follows(u) || !follows(w)) floor_[u] = std::min(floor_[u], l);
         if (follows(w) || !follows(u)) floor_[w] = std::min(floor_[w], l);
-        any_edge[u] = std::min(any_edge[u], l);
-        any_edge[w] = std::min(any_edge[w], l);
       }
     }
-    for (std::size_t v = 0; v < n; ++v)  // only followers around: their edges after all
-      if (std::isinf(floor_[v])) floor_[v] = any_edge[v];
+    for (std::uint32_t v = 0; v < n; ++v) {  // only followers around: their edges after all
+      if (!std::isinf(floor_[v])) continue;
+      for (const std::uint32_t f : faces_[v])
+        for (const std::uint32_t u : surface.triangles[f])
+          if (u != v)
+            floor_[v] = std::min(floor_[v], distance(surface.points[u], surface.points[v]));
+    }
     if (!leaders_.empty())
       faces_.build(n, [&](const auto& emit) {
         for (std::uint32_t f = 0; f < surface.triangles.size(); ++f)
