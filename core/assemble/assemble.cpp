@@ -246,12 +246,14 @@ AssembleResult assemble_shell(const SurfaceMesh& surface, const ShellInput& inpu
   mesh.source_triangle.reserve(max_tets);
   mesh.layer.reserve(max_tets);
   std::vector<std::uint32_t> levels(3 * static_cast<std::size_t>(layers + 1));
-  // With a split order: each prism's corners as keys ordered as the validity search's ids
-  // (its LocalPrism): the order o(v) for a surface vertex, the inner point's own index (the
-  // search numbers its slots in that order), 2n + (layers - 1) o(v) + k - 1 for a layer point.
+  // Each prism's corners split as keys, ordered as the validity search's ids (its LocalPrism):
+  // o(v) for a surface vertex (its place in ShellInput::split_order, or v), n + (layers - 1)
+  // o(v) + k - 1 for a layer point, layers n + the inner point's own index (the search numbers
+  // its slots in the split order). Deeper boundaries have larger keys, so every layer cuts its
+  // side quads from the corner the outermost one cuts them from (split_layered_prism()).
   const std::vector<std::uint32_t>& order = input.split_order;
   const auto n = static_cast<std::uint32_t>(n_surface);
-  std::vector<std::uint32_t> keys(order.empty() ? 0 : levels.size());
+  std::vector<std::uint32_t> keys(order.empty() && layers == 1 ? 0 : levels.size());
   for (std::size_t f = 0; f < n_faces; ++f) {
     const Triangle& tri = surface.triangles[f];
     const std::uint32_t a = tri[0], b = tri[1], c = tri[2];
@@ -285,16 +287,17 @@ AssembleResult assemble_shell(const SurfaceMesh& surface, const ShellInput& inpu
       mesh.layer.push_back(static_cast<std::uint8_t>(layer));
     };
     int dropped = 0;
-    if (order.empty()) {
+    if (keys.empty()) {  // one layer in vertex order: the points' indices are such keys
       dropped = split_layered_prism(levels.data(), layers, emit);
-    } else {  // split the keys in the given order, emit the points they stand for
+    } else {  // split the keys, emit the points they stand for
       for (int c = 0; c < 3; ++c) {
         const std::uint32_t v = tri[c];
         const std::uint32_t i = input.inner_id[v];
-        keys[c] = order[v];
-        keys[3 * layers + c] = i == kOnSurface ? order[v] : levels[3 * layers + c];
+        const std::uint32_t o = order.empty() ? v : order[v];
+        keys[c] = o;
+        keys[3 * layers + c] = i == kOnSurface ? o : static_cast<std::uint32_t>(layers) * n + i;
         for (int k = 1; k < layers; ++k)
-          keys[3 * k + c] = i == kOnSurface ? order[v] : 2 * n + (layers - 1) * order[v] + k - 1;
+          keys[3 * k + c] = i == kOnSurface ? o : n + (layers - 1) * o + k - 1;
       }
       dropped = split_layered_prism(keys.data(), layers, [&](const Tet& key_tet, int layer) {
         Tet t;

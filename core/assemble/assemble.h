@@ -124,8 +124,12 @@ PrismTets split_prism_cut(const std::array<std::uint32_t, 6>& ids, int cuts);
 /// layer boundary k (k = 0: the outer triangle a, b, c; k = layers: a', b', c'; a corner on the
 /// surface repeats its id at every level). Layer k + 1 is the prism between boundaries k and
 /// k + 1, split by split_prism(): its side quads are cut by the global-index rule too, so
-/// neighbouring prisms stay conforming layer by layer. Calls emit(tet, layer) for every tet
-/// (layer 1 at the outer surface) and returns how many tets were dropped.
+/// neighbouring prisms stay conforming layer by layer. assemble_shell() passes keys that grow
+/// with depth (a layer point's above its surface vertex's, an inner point's above every layer
+/// point's) and with the vertex order at each boundary: every layer then cuts a side quad
+/// from the same vertex, its outer corner to the other's inner one, as a single layer does.
+/// Calls emit(tet, layer) for every tet (layer 1 at the outer surface) and returns how many
+/// tets were dropped.
 template <class Emit>
 int split_layered_prism(const std::uint32_t* levels, int layers, const Emit& emit) {
   int dropped = 0;

@@ -106,12 +106,23 @@ LayerPoints layer_points(const SurfaceMesh& surface, const ShellInput& input,
 }
 
 /// One prism of one layer whose side quads may be cut otherwise: its six distinct corners (as
-/// split_prism() takes them), its cuts (assemble.h) and its 3 tets, mesh.tets[first_tet, + 3).
+/// split_prism() takes them), their keys in assemble_shell()'s split, its cuts (assemble.h) and
+/// its 3 tets, mesh.tets[first_tet, + 3).
 struct CutPrism {
-  std::array<std::uint32_t, 6> ids;
+  std::array<std::uint32_t, 6> ids, keys;
   std::uint32_t first_tet;
   int cuts;
 };
+
+/// The 3 tets of `prism` cut as `cuts`, in the order assemble_shell() gives them.
+PrismTets split_cut(const CutPrism& prism, int cuts) {
+  PrismTets split = split_prism_cut(prism.keys, cuts);
+  for (int i = 0; i < split.count; ++i)
+    for (std::uint32_t& corner : split.tets[i])
+      corner = prism.ids[std::find(prism.keys.begin(), prism.keys.end(), corner) -
+                         prism.keys.begin()];
+  return split;
+}
 
 /// A side quad between two CutPrisms: quad side[k] of prism[k].
 struct Quad {
@@ -135,11 +146,19 @@ CutPrisms cut_prisms(const SurfaceMesh& surface, const ShellInput& input, int la
   const std::size_t n = surface.points.size(), K = static_cast<std::size_t>(layers);
   // level[(K + 1) v + k]: vertex v's point on layer boundary k (0 the surface, K the inner one;
   // v itself at every level when it stays on the surface).
-  std::vector<std::uint32_t> level((K + 1) * n);
+  // key: the same points' keys in assemble_shell()'s splits.
+  std::vector<std::uint32_t> level((K + 1) * n), key((K + 1) * n);
+  const auto nk = static_cast<std::uint32_t>(n);
   for (std::uint32_t v = 0; v < n; ++v) {
     const std::uint32_t i = input.inner_id[v];
+    const std::uint32_t o = input.split_order.empty() ? v : input.split_order[v];
     std::fill_n(level.begin() + std::ptrdiff_t((K + 1) * v), K + 1, v);
-    if (i != kOnSurface) level[(K + 1) * v + K] = static_cast<std::uint32_t>(n + i);
+    std::fill_n(key.begin() + std::ptrdiff_t((K + 1) * v), K + 1, o);
+    if (i == kOnSurface) continue;
+    level[(K + 1) * v + K] = nk + i;
+    key[(K + 1) * v + K] = static_cast<std::uint32_t>(K) * nk + i;
+    for (std::uint32_t k = 1; k < K; ++k)
+      key[(K + 1) * v + k] = nk + static_cast<std::uint32_t>(K - 1) * o + k - 1;
   }
   for (std::size_t d = 0; d < layer.point.size();
        ++d)  // K - 1 in a row per vertex, outermost first
@@ -153,12 +172,17 @@ CutPrisms cut_prisms(const SurfaceMesh& surface, const ShellInput& input, int la
     const Triangle& tri = surface.triangles[f];
     std::uint32_t t = first[f];
     for (std::size_t k = 0; k < K; ++k) {
-      std::array<std::uint32_t, 6> ids{};
+      std::array<std::uint32_t, 6> ids{}, keys{};
       for (int c = 0; c < 3; ++c) {
         ids[c] = level[(K + 1) * tri[c] + k];
         ids[3 + c] = level[(K + 1) * tri[c] + k + 1];
+        keys[c] = key[(K + 1) * tri[c] + k];
+        keys[3 + c] = key[(K + 1) * tri[c] + k + 1];
       }
-      const PrismTets split = split_prism(ids);
+      PrismTets split = split_prism(keys);
+      for (int i = 0; i < split.count; ++i)
+        for (std::uint32_t& corner : split.tets[i])
+          corner = ids[std::find(keys.begin(), keys.end(), corner) - keys.begin()];
       const auto layer_of = [&](std::uint32_t u) {
         return mesh.layer.empty() ? std::size_t(1) : std::size_t(mesh.layer[u]);
       };
@@ -167,7 +191,7 @@ CutPrisms cut_prisms(const SurfaceMesh& surface, const ShellInput& input, int la
       if (split.count != 3 || t - begin != 3 ||
           !std::equal(split.tets.begin(), split.tets.end(), mesh.tets.begin() + begin))
         continue;
-      out.prisms.push_back({ids, begin, prism_cuts(ids)});
+      out.prisms.push_back({ids, keys, begin, prism_cuts(keys)});
     }
   }
   // The quads, found by their outer edge: (edge key, prism, side), sorted.
@@ -251,7 +275,7 @@ OptimizeReport optimize_shell(const SurfaceMesh& surface, const std::vector<doub
   const auto cut = [&](std::uint32_t p, int cuts) {
     CutPrism& prism = cp.prisms[p];
     prism.cuts = cuts;
-    const PrismTets split = split_prism_cut(prism.ids, cuts);
+    const PrismTets split = split_cut(prism, cuts);
     std::copy(split.tets.begin(), split.tets.end(), mesh.tets.begin() + prism.first_tet);
   };
   const auto flip = [&](const Quad& q) {
@@ -260,7 +284,7 @@ OptimizeReport optimize_shell(const SurfaceMesh& surface, const std::vector<doub
   const auto worst_of_cuts = [&](const Quad& q, const std::array<int, 2>& cuts) {
     Worst w;
     for (int k = 0; k < 2; ++k) {
-      const PrismTets split = split_prism_cut(cp.prisms[q.prism[k]].ids, cuts[k]);
+      const PrismTets split = split_cut(cp.prisms[q.prism[k]], cuts[k]);
       w.add(mesh, split.tets.begin(), split.tets.end());
     }
     return w;
@@ -494,7 +518,7 @@ OptimizeReport optimize_shell(const SurfaceMesh& surface, const std::vector<doub
     if (!checks.valid()) {  // cannot happen: every move and cut undone is the valid shell
       std::copy(start.begin(), start.end(), mesh.points.begin());
       mesh.tets = start_tets;
-      for (CutPrism& p : cp.prisms) p.cuts = prism_cuts(p.ids);
+      for (CutPrism& p : cp.prisms) p.cuts = prism_cuts(p.keys);
       checks = checker.check(mesh);
       ++report.checks;
       break;
@@ -518,7 +542,7 @@ OptimizeReport optimize_shell(const SurfaceMesh& surface, const std::vector<doub
   }
   for (const Quad& q : cp.quads) {
     const CutPrism& p = cp.prisms[q.prism[0]];
-    report.recut_quads += ((p.cuts ^ prism_cuts(p.ids)) >> q.side[0]) & 1;
+    report.recut_quads += ((p.cuts ^ prism_cuts(p.keys)) >> q.side[0]) & 1;
   }
   mesh.quality = tet_qualities(mesh);
   valid.checks = checks;

@@ -362,9 +362,10 @@ class ShellSearch {
 
   /// Prism f as assemble_shell() would build it from build(s): ids in the same order as the
   /// assembled mesh's split keys (all the splits depend on; ShellInput::split_order) —
-  /// ids[3 k + c] is corner c at layer boundary k (surface vertex v: o(v), inner vertex
-  /// n + o(its group's key) or n + o(v), layer point 2n + (layers - 1) o(v) + k - 1, with o(v)
-  /// = order(v)) — their positions, and its tets.
+  /// ids[3 k + c] is corner c at layer boundary k (surface vertex v: o(v), layer point
+  /// n + (layers - 1) o(v) + k - 1, inner vertex layers n + o(its group's key) or
+  /// layers n + o(v), with o(v) = order(v): deeper boundaries have larger ids) — their
+  /// positions, and its tets.
   struct LocalPrism {
     std::uint32_t face = 0;
     std::vector<std::uint32_t> ids;
@@ -380,6 +381,10 @@ class ShellSearch {
   };
   /// v's place in the order the prism splits follow (ShellInput::split_order).
   std::uint32_t order(std::uint32_t v) const { return order_.empty() ? v : order_[v]; }
+  /// LocalPrism's id of the inner vertex whose key vertex has order o.
+  std::uint32_t inner_key(std::uint32_t o) const {
+    return static_cast<std::uint32_t>(layers_) * static_cast<std::uint32_t>(full_.size()) + o;
+  }
 
   /// v's inner vertex in `s`: its id in LocalPrism's numbering (below n: on the surface) and its
   /// position. A follower's is on its leaders' (on the surface when both of theirs are, theirs
@@ -400,7 +405,7 @@ class ShellSearch {
         at = pa;
         return l.a;
       } else {
-        id = n + order(v);
+        id = inner_key(order(v));
         at = pa + (pb - pa) * l.lambda;
       }
     } else if (s.t[v] == 0) {
@@ -408,10 +413,10 @@ class ShellSearch {
       at = surface_.points[v];
     } else if (s.welded[v]) {
       const std::uint32_t g = start_.input.inner_id[v];
-      id = n + order(group_key_[g]);
+      id = inner_key(order(group_key_[g]));
       at = start_.input.inner_points[g];
     } else {
-      id = n + order(v);
+      id = inner_key(order(v));
       at = cached_position(v, s.t[v]);
     }
     return UINT32_MAX;
@@ -437,7 +442,7 @@ class ShellSearch {
       inner_vertex(s, v, inner, inner_at);
       for (int k = 1; k < K; ++k) {
         const std::size_t at = 3 * static_cast<std::size_t>(k) + c;
-        p.ids[at] = inner < n ? inner : 2 * n + (K - 1) * order(v) + k - 1;
+        p.ids[at] = inner < n ? inner : n + (K - 1) * order(v) + k - 1;
         p.at[at] = sv + (inner_at - sv) * layer_at_[k];
       }
     }

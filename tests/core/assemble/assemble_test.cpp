@@ -496,16 +496,31 @@ TEST(Assemble, LayersStackConformingPrismsAlongTheSideEdges) {
       EXPECT_EQ(per_layer.size(), K * s.num_faces());
       for (const auto& [key, c] : per_layer) EXPECT_EQ(c, 3);
       // Tets of layer k lie between layer boundaries k - 1 and k: every corner of vertex v at
-      // fraction at[k - 1] or at[k] of v's edge.
-      for (std::size_t t = 0; t < m.tets.size(); ++t)
+      // fraction at[k - 1] or at[k] of v's edge. Every layer cuts a side quad from the same
+      // vertex, the one at boundary k - 1 (a twisted quad then bends alike in every layer).
+      const auto level = [&](std::uint32_t p) {
+        const std::uint32_t v = m.surface_vertex[p];
+        const double f =
+            distance(m.points[p], s.points[v]) / distance(in.inner_points[v], s.points[v]);
+        for (int k = 0; k <= K; ++k)
+          if (std::abs(f - at[k]) < 1e-9) return k;
+        return -1;
+      };
+      std::map<std::array<std::uint32_t, 3>, std::set<std::uint32_t>> cut_from;  // face, side
+      for (std::size_t t = 0; t < m.tets.size(); ++t) {
+        const int k = m.layer[t];
         for (const std::uint32_t p : m.tets[t]) {
-          const std::uint32_t v = m.surface_vertex[p];
-          const double f =
-              distance(m.points[p], s.points[v]) / distance(in.inner_points[v], s.points[v]);
-          const int k = m.layer[t];
-          EXPECT_TRUE(std::abs(f - at[k - 1]) < 1e-9 || std::abs(f - at[k]) < 1e-9)
-              << "tet " << t << " layer " << k << " corner at " << f;
+          EXPECT_TRUE(level(p) == k - 1 || level(p) == k) << "tet " << t << " layer " << k;
+          for (const std::uint32_t q : m.tets[t]) {
+            const std::uint32_t u = m.surface_vertex[p], w = m.surface_vertex[q];
+            if (u != w && level(p) == k - 1 && level(q) == k)
+              cut_from[{m.source_triangle[t], std::min(u, w), std::max(u, w)}].insert(u);
+          }
         }
+      }
+      EXPECT_EQ(cut_from.size(), 3 * s.num_faces());
+      for (const auto& [side, from] : cut_from)
+        EXPECT_EQ(from.size(), 1u) << "face " << side[0] << ", side " << side[1] << "-" << side[2];
       ShellCheckOptions layered;
       layered.layers = K;
       const ShellCheckResult c = check_shell(s, m, layered);
