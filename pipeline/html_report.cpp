@@ -513,7 +513,7 @@ std::string report_html(const ShellResult& r, const ReportFiles& files, double r
     }
     h << row("cap faces / floor drops", count_of(v.cap_faces) + " / " + count_of(v.floor_drops));
     if (v.following_vertices)
-      h << row("following an edge's end", count_of(v.following_vertices) + " vertices");
+      h << row("following an edge's ends", count_of(v.following_vertices) + " vertices");
     h << "</table></div>\n";
   }
 

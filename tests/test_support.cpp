@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -510,6 +511,42 @@ SurfaceMesh with_vertices_near_edge_ends(const SurfaceMesh& mesh, std::size_t ev
     if (ids.front() != a) std::reverse(ids.begin(), ids.end());
     for (std::size_t i = 0; i + 1 < ids.size(); ++i)
       out.triangles.push_back({ids[i], ids[i + 1], c});
+  }
+  return out;
+}
+
+SurfaceMesh with_caps(const SurfaceMesh& mesh, std::size_t every, double height,
+                      std::size_t vertices, std::vector<InsertedVertex>& inserted) {
+  SurfaceMesh out = mesh;
+  out.triangles.clear();
+  std::size_t turn = 0;
+  std::set<std::pair<std::uint32_t, std::uint32_t>> bases;  // one strip per edge
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+    const Triangle& tri = mesh.triangles[f];
+    const int k = static_cast<int>(turn % 3);
+    if (f % every != 0 ||
+        !bases.insert({std::min(tri[k], tri[(k + 1) % 3]), std::max(tri[k], tri[(k + 1) % 3])})
+             .second) {
+      out.triangles.push_back(tri);
+      continue;
+    }
+    const double shift = 0.1 * (static_cast<double>(turn++ % 3) - 1.0) / double(vertices + 1);
+    const std::uint32_t a = tri[k], b = tri[(k + 1) % 3], c = tri[(k + 2) % 3];
+    const Vec3d &pa = mesh.points[a], &pb = mesh.points[b], &pc = mesh.points[c];
+    const Vec3d along = pb - pa;
+    const Vec3d towards = normalized((pc - pa) - along * (dot(pc - pa, along) / norm2(along)));
+    std::vector<std::uint32_t> m;
+    for (std::size_t i = 0; i < vertices; ++i) {
+      const double t = 0.2 + 0.6 * double(i + 1) / double(vertices + 1) + shift;
+      m.push_back(static_cast<std::uint32_t>(out.points.size()));
+      out.points.push_back(pa + along * t + towards * (4 * height * t * (1 - t) * norm(along)));
+      inserted.push_back({m.back(), a, b, t});
+    }
+    out.triangles.push_back({a, b, m.back()});
+    for (std::size_t i = vertices - 1; i > 0; --i) out.triangles.push_back({a, m[i], m[i - 1]});
+    out.triangles.push_back({a, m.front(), c});
+    for (std::size_t i = 0; i + 1 < vertices; ++i) out.triangles.push_back({m[i], m[i + 1], c});
+    out.triangles.push_back({m.back(), b, c});
   }
   return out;
 }

@@ -111,4 +111,14 @@ struct InsertedVertex {
 SurfaceMesh with_vertices_near_edge_ends(const SurfaceMesh& mesh, std::size_t every, double t,
                                          std::vector<InsertedVertex>& inserted);
 
+/// `mesh` with a strip of caps on every `every`-th face (a, b, c): `vertices` new vertices m_i
+/// at t_i along the edge (a, b) (evenly spread over 0.2-0.8, shifted by turns), each moved
+/// `height` 4 t_i (1 - t_i) of the edge's length towards c in the face's plane; the face
+/// becomes the caps (a, b, m_k), (a, m_i+1, m_i) and the fan (a, m_1, c), (m_i, m_i+1, c),
+/// (m_k, b, c) (the edge taking turns among the face's three; a face whose edge has a strip
+/// on its other side already is left as it is). Appends the new vertices to
+/// `inserted` (near a, far b, t_i; each 4 height t_i (1 - t_i) |ab| off the edge).
+SurfaceMesh with_caps(const SurfaceMesh& mesh, std::size_t every, double height,
+                      std::size_t vertices, std::vector<InsertedVertex>& inserted);
+
 }  // namespace vdb_shell::test

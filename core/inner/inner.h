@@ -35,7 +35,8 @@ struct ShellInput {
   /// Empty, or per surface vertex its place in the order the prisms' global-index rule follows
   /// instead of the vertex order (a permutation; assemble.h): the validity search places a
   /// vertex that follows an edge's end right after it, so that the sliver prisms between them
-  /// cut their two nearly coincident side quads alike.
+  /// cut their two nearly coincident side quads alike, and orders a cap's base ends so that
+  /// their side quad is cut the way it bends towards the cap (docs/validity.md, step 6).
   std::vector<std::uint32_t> split_order;
 };
 

@@ -11,6 +11,7 @@
 #include <map>
 #include <memory>
 #include <numeric>
+#include <queue>
 
 #include "core/assemble/quality.h"
 #include "core/base/errors.h"
@@ -40,24 +41,181 @@ constexpr double kClusterEdge = 1e-2;
 constexpr double kFollowEnd = 1e-2;
 constexpr double kFollowOffLine = 1e-2;
 
+/// A face (a, b, m) whose corner m lies within this fraction of |ab| of the segment ab, between
+/// its ends (lambda in [kFollowEnd, 1 - kFollowEnd]), is a cap: m follows a and b
+/// (find_followers()) at its own offset from the segment.
+constexpr double kCapHeight = 1e-2;
+
 /// Faces of a lower shape quality are slivers (ShellSearch::quality_demand()).
 constexpr double kSliverShape = 0.1;
 
-/// The vertices of a follower's inner vertex: lambda along a' -> b' (a.k.a. m' above).
+/// The vertices of a follower's inner vertex: lambda along a' -> b' (a.k.a. m' above), moved
+/// by `offset`, its own offset from the segment ab.
 struct Leaders {
   std::uint32_t a = UINT32_MAX, b = UINT32_MAX;
   double lambda = 0;
+  Vec3d offset;
+  /// +1 or -1 when the follower is on a cap, as its base (x, y) runs in the cap's corner order
+  /// (x, y, apex): from a to b or back; 0 on no cap (ShellSearch::demand()).
+  int turn = 0;
+  bool end = true;  ///< next to an edge's end (a cluster's member), or in a strip
 };
 
 /// Per vertex of `surface`: its leaders, or none (a = UINT32_MAX); empty when no vertex follows.
-/// Leaders are roots of clusters or vertices in none, so no follower leads. Sectors
-/// (`start.constraints`) belong to no cluster.
+/// Two kinds, strips first: the vertices of strips of caps (kCapHeight) but their ends, then a
+/// cluster's members next to an edge's end (kClusterEdge). Leaders are vertices that follow
+/// none, and none of them is in a cluster but as its root. Sectors (`start.constraints`)
+/// follow nothing and join no cluster.
 std::vector<Leaders> find_followers(const SurfaceMesh& surface, const IndexLists& faces,
                                     const InnerVertices& start) {
   const auto n = static_cast<std::uint32_t>(surface.points.size());
   const auto sector = [&](std::uint32_t v) {
     return v < start.constraints.size() && !start.constraints[v].empty();
   };
+  std::vector<Leaders> out;
+  std::vector<char> leads;
+  const auto follows = [&](std::uint32_t v) { return !out.empty() && out[v].a != UINT32_MAX; };
+  const auto leader = [&](std::uint32_t v) { return !out.empty() && leads[v]; };
+  const auto follow = [&](std::uint32_t m, const Leaders& l) {
+    if (out.empty()) {
+      out.resize(n);
+      leads.assign(n, 0);
+    }
+    out[m] = l;
+    leads[l.a] = leads[l.b] = 1;
+  };
+  // Union-find, each set rooted at its smallest member.
+  const auto find = [](std::vector<std::uint32_t>& root, std::uint32_t v) {
+    while (root[v] != v) v = root[v] = root[root[v]];
+    return v;
+  };
+  const auto join = [&](std::vector<std::uint32_t>& root, std::uint32_t u, std::uint32_t w) {
+    const std::uint32_t ru = find(root, u), rw = find(root, w);
+    root[std::max(ru, rw)] = std::min(ru, rw);
+  };
+
+  // Caps: faces (a, b, m) with m within kCapHeight |ab| of the segment ab, lambda in
+  // [kFollowEnd, 1 - kFollowEnd]. Caps sharing an edge form a strip (a fan of slivers along
+  // one edge, as T-junctions zipped shut leave): every vertex of it but its two ends p and q,
+  // the farthest apart along it, follows them at its own offset from pq, when all lie that
+  // close to the segment pq.
+  const auto n_faces = static_cast<std::uint32_t>(surface.triangles.size());
+  std::vector<std::uint32_t> strip;  // per face: a cap's set, UINT32_MAX for other faces
+  std::vector<double> base;          // per face: a cap's base length
+  std::vector<int> apex;             // per face: a cap's apex corner
+  struct CapEdge {
+    std::uint64_t key;  ///< the edge's ends, smaller first
+    std::uint32_t face;
+    bool base;
+    bool operator<(const CapEdge& o) const { return key != o.key ? key < o.key : face < o.face; }
+  };
+  std::vector<CapEdge> cap_edges;
+  for (std::uint32_t f = 0; f < n_faces; ++f)
+    for (int k = 0; k < 3; ++k) {
+      const Triangle& tri = surface.triangles[f];
+      const Vec3d &pa = surface.points[tri[(k + 1) % 3]], &pb = surface.points[tri[(k + 2) % 3]];
+      const Vec3d& pm = surface.points[tri[k]];
+      const double l2 = norm2(pb - pa);
+      if (!(l2 > 0)) continue;
+      const double lambda = dot(pm - pa, pb - pa) / l2;
+      if (!(lambda >= kFollowEnd && lambda <= 1 - kFollowEnd) ||
+          !(distance(pm, pa + (pb - pa) * lambda) <= kCapHeight * std::sqrt(l2)))
+        continue;
+      if (strip.empty()) {
+        strip.assign(n_faces, UINT32_MAX);
+        base.assign(n_faces, 0.0);
+        apex.assign(n_faces, 0);
+      }
+      strip[f] = f;
+      base[f] = std::sqrt(l2);
+      apex[f] = k;
+      for (int e = 0; e < 3; ++e) {  // the base, (k + 1, k + 2), marked
+        const std::uint32_t u = tri[e], w = tri[(e + 1) % 3];
+        cap_edges.push_back(
+            {std::uint64_t(std::min(u, w)) << 32 | std::max(u, w), f, e == (k + 1) % 3});
+      }
+      break;
+    }
+  if (!strip.empty()) {
+    // Caps on the two sides of their common base are two strips: the base's side quad can be
+    // cut to suit only one of them (ShellSearch::make_split_order()); the other's prisms are
+    // valid only where the search's depths leave the quad less twisted than the caps are high.
+    std::sort(cap_edges.begin(), cap_edges.end());
+    for (std::size_t i = 1; i < cap_edges.size(); ++i) {
+      const CapEdge &x = cap_edges[i - 1], &y = cap_edges[i];
+      if (x.key == y.key && !(x.base && y.base)) join(strip, x.face, y.face);
+    }
+    // A needle between two caps of a strip (two of its vertices nearly one) joins it when its
+    // third vertex lies as close to the line of a cap it shares a side (not the base) with.
+    for (std::uint32_t g = 0; g < n_faces; ++g) {
+      if (strip[g] != UINT32_MAX) continue;
+      const Triangle& tri = surface.triangles[g];
+      for (int e = 0; e < 3; ++e) {
+        const std::uint32_t u = tri[e], w = tri[(e + 1) % 3];
+        const std::uint64_t key = std::uint64_t(std::min(u, w)) << 32 | std::max(u, w);
+        const auto at =
+            std::lower_bound(cap_edges.begin(), cap_edges.end(), CapEdge{key, 0, false});
+        if (at == cap_edges.end() || at->key != key || at->base) continue;
+        const Triangle& cap = surface.triangles[at->face];
+        const Vec3d &pa = surface.points[cap[(apex[at->face] + 1) % 3]],
+                    &pb = surface.points[cap[(apex[at->face] + 2) % 3]];
+        const Vec3d& pm = surface.points[tri[(e + 2) % 3]];
+        const double lambda = dot(pm - pa, pb - pa) / norm2(pb - pa);
+        if (lambda > 0 && lambda < 1 &&
+            distance(pm, pa + (pb - pa) * lambda) <= kCapHeight * base[at->face]) {
+          if (strip[g] == UINT32_MAX) strip[g] = g;
+          join(strip, g, at->face);
+        }
+      }
+    }
+    IndexLists strips;
+    strips.build(n_faces, [&](const auto& emit) {
+      for (std::uint32_t f = 0; f < n_faces; ++f)
+        if (strip[f] != UINT32_MAX) emit(find(strip, f), f);
+    });
+    std::vector<std::uint32_t> members;
+    for (std::uint32_t s = 0; s < n_faces; ++s) {
+      const auto caps = strips[s];
+      if (caps.size() == 0) continue;
+      members.clear();
+      std::uint32_t widest = *caps.begin();  // the cap with the longest base: the strip's line
+      for (const std::uint32_t f : caps) {
+        members.insert(members.end(), surface.triangles[f].begin(), surface.triangles[f].end());
+        if (base[f] > base[widest]) widest = f;
+      }
+      const Triangle& w = surface.triangles[widest];
+      const Vec3d along =
+          surface.points[w[(apex[widest] + 2) % 3]] - surface.points[w[(apex[widest] + 1) % 3]];
+      std::sort(members.begin(), members.end());
+      members.erase(std::unique(members.begin(), members.end()), members.end());
+      const auto at = [&](std::uint32_t v) { return dot(surface.points[v], along); };
+      std::uint32_t a = members.front(), b = members.front();
+      for (const std::uint32_t v : members) {
+        if (at(v) < at(a)) a = v;
+        if (at(v) > at(b)) b = v;
+      }
+      if (a > b) std::swap(a, b);
+      const Vec3d &pa = surface.points[a], &pb = surface.points[b];
+      const double l2 = norm2(pb - pa);
+      bool fits = l2 > 0 && !follows(a) && !follows(b);
+      std::vector<Leaders> strip_leaders;
+      for (const std::uint32_t v : members) {
+        if (!fits) break;
+        if (v == a || v == b) continue;
+        const double lambda = dot(surface.points[v] - pa, pb - pa) / l2;
+        const Vec3d offset = surface.points[v] - (pa + (pb - pa) * lambda);
+        fits = lambda > 0 && lambda < 1 && norm(offset) <= kCapHeight * std::sqrt(l2) &&
+               !sector(v) && !follows(v) && !leader(v);
+        strip_leaders.push_back({a, b, lambda, offset, dot(pb - pa, along) > 0 ? 1 : -1, false});
+      }
+      if (!fits) continue;
+      std::size_t i = 0;
+      for (const std::uint32_t v : members)
+        if (v != a && v != b) follow(v, strip_leaders[i++]);
+    }
+  }
+
+  // Clusters: union-find over the short edges between vertices of no strip.
   std::vector<double> longest(n, 0.0);  // squared
   for (const Triangle& tri : surface.triangles)
     for (int k = 0; k < 3; ++k) {
@@ -66,49 +224,56 @@ std::vector<Leaders> find_followers(const SurfaceMesh& surface, const IndexLists
       longest[u] = std::max(longest[u], l2);
       longest[w] = std::max(longest[w], l2);
     }
-  // Clusters: union-find over the short edges, each rooted at its smallest vertex.
+  std::vector<char> in_strip(n, 0);  // strips' followers, apart from every cluster
+  for (std::uint32_t v = 0; v < n; ++v) in_strip[v] = follows(v);
+  const auto apart = [&](std::uint32_t v) { return sector(v) || in_strip[v]; };
   std::vector<std::uint32_t> root;
-  const auto find = [&](std::uint32_t v) {
-    while (root[v] != v) v = root[v] = root[root[v]];
-    return v;
-  };
   for (const Triangle& tri : surface.triangles)
     for (int k = 0; k < 3; ++k) {
       const std::uint32_t u = tri[k], w = tri[(k + 1) % 3];
       const double l2 = norm2(surface.points[w] - surface.points[u]);
-      if (!(l2 <= kClusterEdge * kClusterEdge * std::min(longest[u], longest[w])) || sector(u) ||
-          sector(w))
+      if (!(l2 <= kClusterEdge * kClusterEdge * std::min(longest[u], longest[w])) || apart(u) ||
+          apart(w))
         continue;
       if (root.empty()) {
         root.resize(n);
         std::iota(root.begin(), root.end(), 0u);
       }
-      const std::uint32_t ru = find(u), rw = find(w);
-      root[std::max(ru, rw)] = std::min(ru, rw);
+      join(root, u, w);
     }
-  if (root.empty()) return {};
-  for (std::uint32_t v = 0; v < n; ++v) root[v] = find(v);
+  if (root.empty()) return out;
+  for (std::uint32_t v = 0; v < n; ++v) root[v] = find(root, v);
   IndexLists members;
   members.build(n, [&](const auto& emit) {
     for (std::uint32_t v = 0; v < n; ++v) emit(root[v], v);
   });
-  std::vector<Leaders> out(n);
+  // Each headed by its smallest vertex, or by the one leading a strip (two: none follows).
+  std::vector<std::uint32_t> head(n);
+  std::vector<char> led_twice(n, 0);
+  for (std::uint32_t r = 0; r < n; ++r) {
+    if (root[r] != r) continue;
+    const auto cluster = members[r];
+    const auto strip_leaders = std::count_if(cluster.begin(), cluster.end(), leader);
+    head[r] = strip_leaders == 1 ? *std::find_if(cluster.begin(), cluster.end(), leader) : r;
+    led_twice[r] = strip_leaders > 1;
+  }
   std::vector<std::uint32_t> around;
-  bool any = false;
-  for (std::uint32_t a = 0; a < n; ++a) {
-    const auto cluster = members[a];
-    if (root[a] != a || cluster.end() - cluster.begin() < 2) continue;
+  for (std::uint32_t r = 0; r < n; ++r) {
+    const auto cluster = members[r];
+    if (root[r] != r || cluster.size() < 2 || led_twice[r]) continue;
+    const std::uint32_t a = head[r];
     around.clear();  // the roots of the vertices next to the cluster
     for (const std::uint32_t m : cluster)
       for (const std::uint32_t f : faces[m])
         for (const std::uint32_t u : surface.triangles[f])
-          if (root[u] != a) around.push_back(root[u]);
+          if (root[u] != r && !in_strip[u]) around.push_back(head[root[u]]);
     std::sort(around.begin(), around.end());
     around.erase(std::unique(around.begin(), around.end()), around.end());
     const Vec3d& pa = surface.points[a];
     for (const std::uint32_t m : cluster) {
       if (m == a) continue;
       double best_off = std::numeric_limits<double>::infinity();
+      Leaders best;
       for (const std::uint32_t b : around) {
         const Vec3d& pb = surface.points[b];
         const double l2 = norm2(pb - pa);
@@ -118,13 +283,19 @@ std::vector<Leaders> find_followers(const SurfaceMesh& surface, const IndexLists
             distance(surface.points[m], pa + (pb - pa) * lambda) / (lambda * std::sqrt(l2));
         if (off <= kFollowOffLine && off < best_off) {
           best_off = off;
-          out[m] = {a, b, lambda};
-          any = true;
+          best = {a, b, lambda, surface.points[m] - (pa + (pb - pa) * lambda)};
         }
       }
+      if (best.a == UINT32_MAX) continue;
+      for (const std::uint32_t f : faces[m]) {  // m is the apex of a cap on ab too
+        const Triangle& tri = surface.triangles[f];
+        const int k = static_cast<int>(std::find(tri.begin(), tri.end(), m) - tri.begin());
+        if (tri[(k + 1) % 3] == best.a && tri[(k + 2) % 3] == best.b) best.turn = 1;
+        if (tri[(k + 1) % 3] == best.b && tri[(k + 2) % 3] == best.a) best.turn = -1;
+      }
+      follow(m, best);
     }
   }
-  if (!any) out.clear();
   return out;
 }
 
@@ -150,36 +321,50 @@ class ShellSearch {
       for (std::uint32_t f = 0; f < surface.triangles.size(); ++f)
         for (std::uint32_t v : surface.triangles[f]) emit(v, f);
     });
-    leaders_ = find_followers(surface, faces_, start);
-    if (!leaders_.empty()) {  // the split order: each cluster's followers right after its root
-      IndexLists followers;
-      followers.build(n, [&](const auto& emit) {
-        for (std::uint32_t v = 0; v < n; ++v)
-          if (follows(v)) emit(leaders_[v].a, v);
-      });
-      sequence_.reserve(n);
-      for (std::uint32_t v = 0; v < n; ++v) {
-        if (follows(v)) continue;
-        sequence_.push_back(v);
-        sequence_.insert(sequence_.end(), followers[v].begin(), followers[v].end());
+    std::vector<Vec3d> normal(n);
+    std::vector<std::vector<Vec3d>> face_normals(n);
+    for (std::uint32_t f = 0; f < surface.triangles.size(); ++f) {
+      const Vec3d nf = face_normal_area(surface, f);
+      for (const std::uint32_t v : surface.triangles[f]) {
+        normal[v] += nf;
+        face_normals[v].push_back(normalized(nf));
       }
-      order_.resize(n);
-      for (std::uint32_t k = 0; k < n; ++k) order_[sequence_[k]] = k;
     }
+    for (std::size_t v = 0; v < start.constraints.size(); ++v)
+      face_normals[v].insert(face_normals[v].end(), start.constraints[v].begin(),
+                             start.constraints[v].end());
+    correction_.assign(n, Vec3d{});
+    std::vector<char> folds(n, 0);
+    for (std::size_t v = 0; v < n; ++v) {
+      // Beyond the trace's end (only for traces shorter than the floor): continue straight
+      // along its first step, or inward along the vertex normal for a trace that never moved.
+      fallback_[v] = traces.end[v] > 0 ? normalized(traces.sample(v, 1) - traces.sample(v, 0))
+                                       : -normalized(normal[v]);
+      // The first direction must point inward for every incident face, with a margin, or the
+      // thinnest shell already folds: bend the start of such a trace (within the floor depth)
+      // into the most inward direction.
+      const Vec3d first = fallback_[v];
+      const double margin = inward_margin(face_normals[v], first);
+      if (margin >= kMinMargin) continue;
+      const Vec3d safe = most_inward_direction(face_normals[v]);
+      const double safe_margin = norm2(safe) > 0 ? inward_margin(face_normals[v], safe) : 0.0;
+      if (safe_margin > margin) correction_[v] = safe - first;
+      // A sector (start.constraints) needs less than a vertex (sectors.h).
+      const bool sector = v < start.constraints.size() && !start.constraints[v].empty();
+      folds[v] = std::max(margin, safe_margin) < (sector ? kSectorMargin : kFoldMargin);
+    }
+    leaders_ = find_followers(surface, faces_, start);
+    for (std::uint32_t v = 0; v < n; ++v)  // followers are placed by their leaders
+      if (folds[v] && !follows(v)) folded_.push_back(v);
     // A leader's floor ignores its edges to followers (they are the short ones); every move of
     // a leader settles its followers' prisms too.
-    std::vector<Vec3d> normal(n);
-    for (std::size_t f = 0; f < surface.triangles.size(); ++f) {
-      const Triangle& tri = surface.triangles[f];
-      const Vec3d nf = face_normal_area(surface, f);
+    for (const Triangle& tri : surface.triangles)
       for (int k = 0; k < 3; ++k) {
-        normal[tri[k]] += nf;
         const std::uint32_t u = tri[k], w = tri[(k + 1) % 3];
         const double l = distance(surface.points[u], surface.points[w]);
         if (follows(u) || !follows(w)) floor_[u] = std::min(floor_[u], l);
         if (follows(w) || !follows(u)) floor_[w] = std::min(floor_[w], l);
       }
-    }
     for (std::uint32_t v = 0; v < n; ++v) {  // only followers around: their edges after all
       if (!std::isinf(floor_[v])) continue;
       for (const std::uint32_t f : faces_[v])
@@ -203,43 +388,108 @@ class ShellSearch {
     groups_.build(start.input.inner_points.size(), [&](const auto& emit) {
       for (std::uint32_t v = 0; v < n; ++v) emit(start.input.inner_id[v], v);
     });
-    std::vector<std::vector<Vec3d>> face_normals(n);
-    for (std::size_t f = 0; f < surface.triangles.size(); ++f)
-      for (std::uint32_t v : surface.triangles[f])
-        face_normals[v].push_back(normalized(face_normal_area(surface, f)));
-    for (std::size_t v = 0; v < start.constraints.size(); ++v)
-      face_normals[v].insert(face_normals[v].end(), start.constraints[v].begin(),
-                             start.constraints[v].end());
-    correction_.assign(n, Vec3d{});
     limit_ = start.limit;
     limit_.resize(n, std::numeric_limits<double>::infinity());
     for (std::size_t v = 0; v < n; ++v) {
       floor_[v] = std::min(floor_[v] * options.floor_fraction, 0.5 * limit_[v]);
       full_[v] = std::max(start.arc[v], floor_[v]);
-      // Beyond the trace's end (only for traces shorter than the floor): continue straight
-      // along its first step, or inward along the vertex normal for a trace that never moved.
-      fallback_[v] = traces.end[v] > 0 ? normalized(traces.sample(v, 1) - traces.sample(v, 0))
-                                       : -normalized(normal[v]);
-      if (follows(static_cast<std::uint32_t>(v))) continue;  // placed by its leaders
-      // The first direction must point inward for every incident face, with a margin, or the
-      // thinnest shell already folds: bend the start of such a trace (within the floor depth)
-      // into the most inward direction.
-      const Vec3d first = fallback_[v];
-      const double margin = inward_margin(face_normals[v], first);
-      if (margin >= kMinMargin) continue;
-      const Vec3d safe = most_inward_direction(face_normals[v]);
-      const double safe_margin = norm2(safe) > 0 ? inward_margin(face_normals[v], safe) : 0.0;
-      if (safe_margin > margin) correction_[v] = safe - first;
-      // A sector (start.constraints) needs less than a vertex (sectors.h).
-      const bool sector = v < start.constraints.size() && !start.constraints[v].empty();
-      if (std::max(margin, safe_margin) < (sector ? kSectorMargin : kFoldMargin))
-        folded_.push_back(static_cast<std::uint32_t>(v));
     }
+    if (!leaders_.empty()) make_split_order();
     floor_fraction_ = options.floor_fraction;
     floor_drop_ = options.floor_drop;
     layers_ = options.layers;
     layer_at_ = layer_fractions(options.layers, options.layer_ratio);
     update_caps();
+  }
+
+  /// What a follower on a cap asks of the split order (UINT32_MAX, UINT32_MAX: nothing): its
+  /// leaders a, b ordered by the twist of their side quad, dot(b - a, d_b x d_a) with d the
+  /// first directions, seen along the cap's base (Leaders::turn): the quad is cut from the
+  /// first. The cap's prism, as thin as the cap, lies on the cut quad's two triangles, which
+  /// bend towards it only when cut that way; cut the other way its tets invert wherever the
+  /// twist outweighs the cap's height.
+  std::array<std::uint32_t, 2> demand(std::uint32_t v) const {
+    const Leaders& l = leaders_[v];
+    if (!follows(v) || l.turn == 0) return {UINT32_MAX, UINT32_MAX};
+    const Vec3d &pa = surface_.points[l.a], &pb = surface_.points[l.b];
+    const Vec3d da = fallback_[l.a] + correction_[l.a], db = fallback_[l.b] + correction_[l.b];
+    const double twist = dot(pb - pa, cross(db, da)) * l.turn;
+    return twist >= 0 ? std::array<std::uint32_t, 2>{l.a, l.b}
+                      : std::array<std::uint32_t, 2>{l.b, l.a};
+  }
+
+  /// The vertices that follow none in the vertex order, but for the followers' demands (a
+  /// cycle of them broken at its smallest vertex); `rank` gets each one's place.
+  std::vector<std::uint32_t> leader_order(std::vector<std::uint32_t>& rank) const {
+    const auto n = static_cast<std::uint32_t>(full_.size());
+    IndexLists later;  // leader -> the leaders that must come after it
+    later.build(n, [&](const auto& emit) {
+      for (std::uint32_t v = 0; v < n; ++v) {
+        const auto [first, second] = demand(v);
+        if (first != UINT32_MAX) emit(first, second);
+      }
+    });
+    std::vector<std::uint32_t> pending(n, 0);
+    for (const std::uint32_t second : later.items) ++pending[second];
+    std::vector<char> placed(n, 0);
+    std::priority_queue<std::uint32_t, std::vector<std::uint32_t>, std::greater<>> ready;
+    for (std::uint32_t v = 0; v < n; ++v)
+      if (!follows(v) && pending[v] == 0) ready.push(v);
+    std::vector<std::uint32_t> leaders;
+    leaders.reserve(n);
+    std::uint32_t next = 0;  // the smallest vertex perhaps not placed: breaks cycles
+    for (;;) {
+      if (ready.empty()) {
+        while (next < n && (placed[next] || follows(next))) ++next;
+        if (next == n) break;
+        ready.push(next);
+      }
+      const std::uint32_t v = ready.top();
+      ready.pop();
+      if (placed[v]) continue;
+      placed[v] = 1;
+      leaders.push_back(v);
+      for (const std::uint32_t w : later[v])
+        if (--pending[w] == 0 && !placed[w]) ready.push(w);
+    }
+    rank.assign(n, 0);
+    for (std::uint32_t k = 0; k < leaders.size(); ++k) rank[leaders[k]] = k;
+    return leaders;
+  }
+
+  /// The split order (ShellInput::split_order): leader_order(), each follower right after its
+  /// first leader (a cluster's member after its root), nearest first.
+  void make_split_order() {
+    const auto n = static_cast<std::uint32_t>(full_.size());
+    std::vector<std::uint32_t> anchor(n, UINT32_MAX);  // per follower: its first leader
+    for (std::uint32_t v = 0; v < n; ++v)
+      if (follows(v)) anchor[v] = leaders_[v].a;
+    std::vector<std::uint32_t> rank;
+    const std::vector<std::uint32_t> leaders = leader_order(rank);
+    for (std::uint32_t v = 0; v < n; ++v)
+      if (follows(v) && !leaders_[v].end && rank[leaders_[v].b] < rank[leaders_[v].a])
+        anchor[v] = leaders_[v].b;
+    IndexLists followers;  // each anchor's, nearest first: a strip's quads are cut alike
+    followers.build(n, [&](const auto& emit) {
+      for (std::uint32_t v = 0; v < n; ++v)
+        if (follows(v)) emit(anchor[v], v);
+    });
+    for (std::uint32_t a = 0; a < n; ++a) {
+      const auto from_a = [&](std::uint32_t v) {
+        return distance(surface_.points[v], surface_.points[a]);
+      };
+      std::stable_sort(followers.items.begin() + followers.start[a],
+                       followers.items.begin() + followers.start[a + 1],
+                       [&](std::uint32_t u, std::uint32_t w) { return from_a(u) < from_a(w); });
+    }
+    sequence_.clear();
+    sequence_.reserve(n);
+    for (const std::uint32_t v : leaders) {
+      sequence_.push_back(v);
+      sequence_.insert(sequence_.end(), followers[v].begin(), followers[v].end());
+    }
+    order_.resize(n);
+    for (std::uint32_t k = 0; k < n; ++k) order_[sequence_[k]] = k;
   }
 
   /// Keeps v on the surface from now on (t_v = 0, as a folded vertex) and returns true, unless
@@ -406,7 +656,7 @@ class ShellSearch {
         return l.a;
       } else {
         id = inner_key(order(v));
-        at = pa + (pb - pa) * l.lambda;
+        at = pa + (pb - pa) * l.lambda + l.offset;
       }
     } else if (s.t[v] == 0) {
       id = order(v);

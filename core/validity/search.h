@@ -38,12 +38,15 @@
 // again: where that offends, the raised vertices involved go back to where they were, never
 // lower, until the shell is valid again (docs/validity.md).
 // Followers: a vertex m on the segment from a to b, next to a (an edge no longer than 1e-2 of
-// the longest edge at each end joins m to a's cluster), has no unknown of its own: its inner
-// vertex is a' + lambda (b' - a'), and stepping it back steps back a or b. The prisms then
-// follow the split order (ShellInput::split_order: each follower right after a), in which the
-// sliver prisms between a and m cut their two nearly coincident side quads alike (details in
-// docs/validity.md). A prism on a sliver face is settled only down to a quality in proportion
-// to its face's shape.
+// the longest edge at each end joins m to a's cluster), or a cap's apex within 1e-2 |ab| of
+// the segment ab (and the other vertices of a strip of caps, whose ends are a and b), has no
+// unknown of its own: its inner vertex is a' + lambda (b' - a') plus its own offset from the
+// segment, and stepping it back steps back a or b. The prisms then follow the split order
+// (ShellInput::split_order: each follower right after a leader, each cap's leaders ordered by
+// the twist of their side quad), in which the sliver prisms between a and m cut their two
+// nearly coincident side quads alike and a cap's prism lies on the side its base quad bends
+// to (details in docs/validity.md). A prism on a sliver face is settled only down to a quality
+// in proportion to its face's shape.
 // Last, inner vertices within 1e-8 of the surface's diagonal of each other (traces that met at
 // one point and left their weld) step back apart, their floors dropped when at them, and the
 // rounds run again: readers that weld duplicate positions would see non-manifold faces.
@@ -94,7 +97,7 @@ struct ValidShell {
   double moved_back_mean = 0;   ///< mean (traced - final) / traced over moved-back vertices
   std::size_t unwelded = 0;     ///< vertices that left their weld
   std::size_t floor_drops = 0;  ///< floors lowered where the floor itself offended
-  std::size_t followers = 0;    ///< vertices whose inner vertex follows their cluster's root
+  std::size_t followers = 0;    ///< vertices whose inner vertex follows two others' (step 6)
   /// The search stopped with only elements at their floors offending (the floors as low as they
   /// go): `checks` is then invalid, and floor_valid says whether the floor configuration failed.
   bool stalled = false;

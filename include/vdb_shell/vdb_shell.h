@@ -102,7 +102,7 @@ struct ValidityReport {
   std::size_t sectors = 0;              ///< sectors of the folded vertices
   std::size_t gap_tets = 0;             ///< tets filling the gaps between sectors
   std::size_t on_surface_vertices = 0;  ///< vertices kept on the surface (no split found)
-  std::size_t following_vertices = 0;   ///< vertices next to an edge's end, following its ends
+  std::size_t following_vertices = 0;   ///< vertices next to an edge following its ends
   std::size_t cap_faces = 0;
   std::size_t floor_drops = 0;
   bool floor_valid = true;

@@ -221,6 +221,47 @@ TEST(Validity, VerticesNextToAnEdgesEndFollowTheEdgesEnds) {
   }
 }
 
+TEST(Validity, CapsApexesFollowTheirBases) {
+  // A cap, a face whose corner m lies 1e-6 of its base (a, b) off that edge, had a prism as thin
+  // as the cap between the side quad (a, b) and the quads (a, m), (m, b): with m's own trace it
+  // inverted, and so it did with m's inner point on a'b' wherever the quad (a, b) was cut along
+  // the diagonal its twist bends away from the cap (exit 3 on such shapes). Now m's inner point
+  // is on a'b' at m's place, moved by m's offset from ab, and the split order cuts the quad
+  // the way its twist bends towards the cap.
+  // Strips of 3 caps (a fan of slivers along one edge) follow the edge's ends alike.
+  for (const std::size_t strip : {1, 3})
+    for (const char* name : {"sphere", "box", "torus"}) {
+      std::vector<test::InsertedVertex> inserted;
+      const SurfaceMesh plain = make_shape(name, 2);
+      const SurfaceMesh mesh = test::with_caps(plain, 7, 1e-6, strip, inserted);
+      ASSERT_GE(inserted.size(), 20u) << name;
+      ShellOptions options;
+      options.fields.resolution = 48;
+      options.optimize.enabled = false;  // it moves inner vertices off their places
+      ShellResult r, plain_r;
+      ASSERT_NO_THROW(r = build_shell(mesh, options, {}, name)) << name;
+      ASSERT_NO_THROW(plain_r = build_shell(plain, options, {}, name)) << name;
+      EXPECT_EQ(test::independent_shell_problems(r.surface, r.mesh), "") << name;
+      EXPECT_EQ(r.validity.following_vertices, inserted.size()) << name;
+      const double coverage = test::independent_coverage(r.surface, r.mesh);
+      EXPECT_GT(coverage, test::independent_coverage(plain, plain_r.mesh) - 0.1) << name;
+      std::vector<Vec3d> inner(r.surface.points.size());  // as in the test above
+      for (std::size_t f = 0; f < r.surface.triangles.size(); ++f)
+        for (int k = 0; k < 3; ++k)
+          inner[r.surface.triangles[f][k]] =
+              r.inner_surface.points[r.inner_surface.triangles[f][(3 - k) % 3]];
+      const double tolerance = 1e-9 * bounding_box(mesh).diagonal();
+      for (const test::InsertedVertex& m : inserted) {
+        const Vec3d &a = mesh.points[m.near], &b = mesh.points[m.far];
+        const Vec3d offset = mesh.points[m.vertex] - (a + (b - a) * m.t);
+        const Vec3d &ia = inner[m.near], &ib = inner[m.far];  // one point: a weld, shared
+        EXPECT_LT(distance(inner[m.vertex], ia == ib ? ia : ia + (ib - ia) * m.t + offset),
+                  tolerance)
+            << name << ": vertex " << m.vertex << " on edge " << m.near << "-" << m.far;
+      }
+    }
+}
+
 TEST(Validity, SharedMeshesValidAndSameForOneAndTwoThreads) {
   const auto meshes = test::shared_meshes_dir();
   if (meshes.empty()) GTEST_SKIP() << "../shared/meshes is absent";
