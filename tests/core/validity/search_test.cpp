@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
 #include <string>
 #include <vector>
 
@@ -183,6 +184,37 @@ TEST(Validity, EveryTetReachesTheMinimumQualityWhereNoCornerIsAtItsFloor) {
   }
 }
 
+/// Shells `mesh` (`plain` with vertices inserted) at 48^3 without the optimisation (it moves
+/// inner vertices off their leaders' segments): checked independently, `followers` following,
+/// nearly as thick as the shell of `plain` (none following). `inner` gets each vertex's inner
+/// point, read off the inner surface (faces reversed: corners 0, 2, 1). False if a run threw.
+bool shell_with_followers(const SurfaceMesh& plain, const SurfaceMesh& mesh, const char* name,
+                          std::size_t followers, std::vector<Vec3d>& inner) {
+  ShellOptions options;
+  options.fields.resolution = 48;
+  options.optimize.enabled = false;
+  ShellResult r, plain_r;
+  try {
+    r = build_shell(mesh, options, {}, name);
+    plain_r = build_shell(plain, options, {}, name);
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << name << ": " << e.what();
+    return false;
+  }
+  EXPECT_EQ(test::independent_shell_problems(r.surface, r.mesh), "") << name;
+  EXPECT_EQ(r.validity.following_vertices, followers) << name;
+  EXPECT_EQ(plain_r.validity.following_vertices, 0u) << name;
+  EXPECT_GT(test::independent_coverage(r.surface, r.mesh),
+            test::independent_coverage(plain, plain_r.mesh) - 0.1)
+      << name;
+  inner.assign(r.surface.points.size(), Vec3d{});
+  for (std::size_t f = 0; f < r.surface.triangles.size(); ++f)
+    for (int k = 0; k < 3; ++k)
+      inner[r.surface.triangles[f][k]] =
+          r.inner_surface.points[r.inner_surface.triangles[f][(3 - k) % 3]];
+  return true;
+}
+
 TEST(Validity, VerticesNextToAnEdgesEndFollowTheEdgesEnds) {
   // A vertex inserted on an edge 1e-5 of its length from an end (as T-junction repairs and CAD
   // exports leave) took a trace of its own: over so short an edge it crosses its neighbour's,
@@ -194,23 +226,8 @@ TEST(Validity, VerticesNextToAnEdgesEndFollowTheEdgesEnds) {
     const SurfaceMesh plain = make_shape(name, 2);
     const SurfaceMesh mesh = test::with_vertices_near_edge_ends(plain, 7, 1e-5, inserted);
     ASSERT_GE(inserted.size(), 20u) << name;
-    ShellOptions options;
-    options.fields.resolution = 48;
-    options.optimize.enabled = false;  // it moves inner vertices off the segments
-    ShellResult r, plain_r;
-    ASSERT_NO_THROW(r = build_shell(mesh, options, {}, name)) << name;
-    ASSERT_NO_THROW(plain_r = build_shell(plain, options, {}, name)) << name;
-    EXPECT_EQ(test::independent_shell_problems(r.surface, r.mesh), "") << name;
-    EXPECT_EQ(r.validity.following_vertices, inserted.size()) << name;
-    EXPECT_EQ(plain_r.validity.following_vertices, 0u) << name;
-    const double coverage = test::independent_coverage(r.surface, r.mesh);
-    EXPECT_GT(coverage, test::independent_coverage(plain, plain_r.mesh) - 0.1) << name;
-    // Each vertex's inner point, read off the inner surface (faces reversed: corners 0, 2, 1).
-    std::vector<Vec3d> inner(r.surface.points.size());
-    for (std::size_t f = 0; f < r.surface.triangles.size(); ++f)
-      for (int k = 0; k < 3; ++k)
-        inner[r.surface.triangles[f][k]] =
-            r.inner_surface.points[r.inner_surface.triangles[f][(3 - k) % 3]];
+    std::vector<Vec3d> inner;
+    ASSERT_TRUE(shell_with_followers(plain, mesh, name, inserted.size(), inner));
     const double tolerance = 1e-9 * bounding_box(mesh).diagonal();
     for (const test::InsertedVertex& m : inserted) {
       const Vec3d &a = inner[m.near], &b = inner[m.far];
@@ -235,21 +252,8 @@ TEST(Validity, CapsApexesFollowTheirBases) {
       const SurfaceMesh plain = make_shape(name, 2);
       const SurfaceMesh mesh = test::with_caps(plain, 7, 1e-6, strip, inserted);
       ASSERT_GE(inserted.size(), 20u) << name;
-      ShellOptions options;
-      options.fields.resolution = 48;
-      options.optimize.enabled = false;  // it moves inner vertices off their places
-      ShellResult r, plain_r;
-      ASSERT_NO_THROW(r = build_shell(mesh, options, {}, name)) << name;
-      ASSERT_NO_THROW(plain_r = build_shell(plain, options, {}, name)) << name;
-      EXPECT_EQ(test::independent_shell_problems(r.surface, r.mesh), "") << name;
-      EXPECT_EQ(r.validity.following_vertices, inserted.size()) << name;
-      const double coverage = test::independent_coverage(r.surface, r.mesh);
-      EXPECT_GT(coverage, test::independent_coverage(plain, plain_r.mesh) - 0.1) << name;
-      std::vector<Vec3d> inner(r.surface.points.size());  // as in the test above
-      for (std::size_t f = 0; f < r.surface.triangles.size(); ++f)
-        for (int k = 0; k < 3; ++k)
-          inner[r.surface.triangles[f][k]] =
-              r.inner_surface.points[r.inner_surface.triangles[f][(3 - k) % 3]];
+      std::vector<Vec3d> inner;
+      ASSERT_TRUE(shell_with_followers(plain, mesh, name, inserted.size(), inner));
       const double tolerance = 1e-9 * bounding_box(mesh).diagonal();
       for (const test::InsertedVertex& m : inserted) {
         const Vec3d &a = mesh.points[m.near], &b = mesh.points[m.far];
