@@ -138,7 +138,7 @@ std::vector<Leaders> find_followers(const SurfaceMesh& surface, const IndexLists
     }
   if (!strip.empty()) {
     // Caps on the two sides of their common base are two strips: the base's side quad can be
-    // cut to suit only one of them (ShellSearch::make_split_order()); the other's prisms are
+    // cut to suit only one of them (ShellSearch::demand()); the other's prisms are
     // valid only where the search's depths leave the quad less twisted than the caps are high.
     std::sort(cap_edges.begin(), cap_edges.end());
     for (std::size_t i = 1; i < cap_edges.size(); ++i) {
