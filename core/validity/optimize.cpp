@@ -119,8 +119,8 @@ PrismTets split_cut(const CutPrism& prism, int cuts) {
   PrismTets split = split_prism_cut(prism.keys, cuts);
   for (int i = 0; i < split.count; ++i)
     for (std::uint32_t& corner : split.tets[i])
-      corner = prism.ids[std::find(prism.keys.begin(), prism.keys.end(), corner) -
-                         prism.keys.begin()];
+      corner =
+          prism.ids[std::find(prism.keys.begin(), prism.keys.end(), corner) - prism.keys.begin()];
   return split;
 }
 
