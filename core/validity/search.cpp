@@ -208,10 +208,24 @@ std::vector<Leaders> find_followers(const SurfaceMesh& surface, const IndexLists
                !sector(v) && !follows(v) && !leader(v);
         strip_leaders.push_back({a, b, lambda, offset, dot(pb - pa, along) > 0 ? 1 : -1, false});
       }
-      if (!fits) continue;
-      std::size_t i = 0;
-      for (const std::uint32_t v : members)
-        if (v != a && v != b) follow(v, strip_leaders[i++]);
+      if (fits) {
+        std::size_t i = 0;
+        for (const std::uint32_t v : members)
+          if (v != a && v != b) follow(v, strip_leaders[i++]);
+        continue;
+      }
+      for (const std::uint32_t f : caps) {  // a strip that does not fit: cap by cap
+        if (!(base[f] > 0)) continue;       // a needle
+        const Triangle& tri = surface.triangles[f];
+        const std::uint32_t m = tri[apex[f]], x = tri[(apex[f] + 1) % 3],
+                            y = tri[(apex[f] + 2) % 3];
+        if (sector(m) || follows(m) || leader(m) || follows(x) || follows(y)) continue;
+        const std::uint32_t p = std::min(x, y), q = std::max(x, y);
+        const Vec3d &pp = surface.points[p], &pq = surface.points[q];
+        const double lambda = dot(surface.points[m] - pp, pq - pp) / norm2(pq - pp);
+        follow(m, {p, q, lambda, surface.points[m] - (pp + (pq - pp) * lambda), p == x ? 1 : -1,
+                   false});
+      }
     }
   }
 
