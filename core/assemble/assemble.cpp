@@ -295,9 +295,9 @@ AssembleResult assemble_shell(const SurfaceMesh& surface, const ShellInput& inpu
         const std::uint32_t i = input.inner_id[v];
         const std::uint32_t o = order.empty() ? v : order[v];
         keys[c] = o;
-        keys[3 * layers + c] = i == kOnSurface ? o : static_cast<std::uint32_t>(layers) * n + i;
+        keys[3 * layers + c] = i == kOnSurface ? o : inner_point_key(n, layers, i);
         for (int k = 1; k < layers; ++k)
-          keys[3 * k + c] = i == kOnSurface ? o : n + (layers - 1) * o + k - 1;
+          keys[3 * k + c] = i == kOnSurface ? o : layer_point_key(n, layers, o, k);
       }
       dropped = split_layered_prism(keys.data(), layers, [&](const Tet& key_tet, int layer) {
         Tet t;

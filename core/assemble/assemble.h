@@ -120,6 +120,16 @@ int prism_cuts(const std::array<std::uint32_t, 6>& ids);
 /// \pre the six ids are distinct and cuts is not one of kCyclicCuts.
 PrismTets split_prism_cut(const std::array<std::uint32_t, 6>& ids, int cuts);
 
+/// The split keys of a shell of n surface vertices and `layers` layers (assemble_shell(), the
+/// validity search, the optimisation): the point of the vertex of order o at layer boundary k,
+/// 0 < k < layers, and the inner point of slot `slot` (a surface point's key is its order).
+inline std::uint32_t layer_point_key(std::uint32_t n, int layers, std::uint32_t o, int k) {
+  return n + static_cast<std::uint32_t>(layers - 1) * o + static_cast<std::uint32_t>(k - 1);
+}
+inline std::uint32_t inner_point_key(std::uint32_t n, int layers, std::uint32_t slot) {
+  return static_cast<std::uint32_t>(layers) * n + slot;
+}
+
 /// Splits the prism with corner ids `levels` cut into layers: levels[3 k + i] is corner i of
 /// layer boundary k (k = 0: the outer triangle a, b, c; k = layers: a', b', c'; a corner on the
 /// surface repeats its id at every level). Layer k + 1 is the prism between boundaries k and

@@ -114,14 +114,18 @@ struct CutPrism {
   int cuts;
 };
 
-/// The 3 tets of `prism` cut as `cuts`, in the order assemble_shell() gives them.
-PrismTets split_cut(const CutPrism& prism, int cuts) {
-  PrismTets split = split_prism_cut(prism.keys, cuts);
+/// `split`, a split of the corners `keys`, with each key replaced by its corner's id.
+PrismTets with_ids(PrismTets split, const std::array<std::uint32_t, 6>& keys,
+                   const std::array<std::uint32_t, 6>& ids) {
   for (int i = 0; i < split.count; ++i)
     for (std::uint32_t& corner : split.tets[i])
-      corner =
-          prism.ids[std::find(prism.keys.begin(), prism.keys.end(), corner) - prism.keys.begin()];
+      corner = ids[std::find(keys.begin(), keys.end(), corner) - keys.begin()];
   return split;
+}
+
+/// The 3 tets of `prism` cut as `cuts`, in the order assemble_shell() gives them.
+PrismTets split_cut(const CutPrism& prism, int cuts) {
+  return with_ids(split_prism_cut(prism.keys, cuts), prism.keys, prism.ids);
 }
 
 /// A side quad between two CutPrisms: quad side[k] of prism[k].
@@ -156,9 +160,8 @@ CutPrisms cut_prisms(const SurfaceMesh& surface, const ShellInput& input, int la
     std::fill_n(key.begin() + std::ptrdiff_t((K + 1) * v), K + 1, o);
     if (i == kOnSurface) continue;
     level[(K + 1) * v + K] = nk + i;
-    key[(K + 1) * v + K] = static_cast<std::uint32_t>(K) * nk + i;
-    for (std::uint32_t k = 1; k < K; ++k)
-      key[(K + 1) * v + k] = nk + static_cast<std::uint32_t>(K - 1) * o + k - 1;
+    key[(K + 1) * v + K] = inner_point_key(nk, layers, i);
+    for (int k = 1; k < layers; ++k) key[(K + 1) * v + k] = layer_point_key(nk, layers, o, k);
   }
   for (std::size_t d = 0; d < layer.point.size();
        ++d)  // K - 1 in a row per vertex, outermost first
@@ -179,10 +182,7 @@ CutPrisms cut_prisms(const SurfaceMesh& surface, const ShellInput& input, int la
         keys[c] = key[(K + 1) * tri[c] + k];
         keys[3 + c] = key[(K + 1) * tri[c] + k + 1];
       }
-      PrismTets split = split_prism(keys);
-      for (int i = 0; i < split.count; ++i)
-        for (std::uint32_t& corner : split.tets[i])
-          corner = ids[std::find(keys.begin(), keys.end(), corner) - keys.begin()];
+      const PrismTets split = with_ids(split_prism(keys), keys, ids);
       const auto layer_of = [&](std::uint32_t u) {
         return mesh.layer.empty() ? std::size_t(1) : std::size_t(mesh.layer[u]);
       };

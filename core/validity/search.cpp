@@ -61,6 +61,13 @@ struct Leaders {
   bool end = true;  ///< next to an edge's end (a cluster's member), or in a strip
 };
 
+/// m on the line through a and b: lambda along a -> b and its offset from the line.
+Leaders along(const SurfaceMesh& surface, std::uint32_t m, std::uint32_t a, std::uint32_t b) {
+  const Vec3d &pa = surface.points[a], &pb = surface.points[b];
+  const double lambda = dot(surface.points[m] - pa, pb - pa) / norm2(pb - pa);
+  return {a, b, lambda, surface.points[m] - (pa + (pb - pa) * lambda)};
+}
+
 /// Per vertex of `surface`: its leaders, or none (a = UINT32_MAX); empty when no vertex follows.
 /// Two kinds, strips first: the vertices of strips of caps (kCapHeight) but their ends, then a
 /// cluster's members next to an edge's end (kClusterEdge). Leaders are vertices that follow
@@ -113,13 +120,12 @@ std::vector<Leaders> find_followers(const SurfaceMesh& surface, const IndexLists
   for (std::uint32_t f = 0; f < n_faces; ++f)
     for (int k = 0; k < 3; ++k) {
       const Triangle& tri = surface.triangles[f];
-      const Vec3d &pa = surface.points[tri[(k + 1) % 3]], &pb = surface.points[tri[(k + 2) % 3]];
-      const Vec3d& pm = surface.points[tri[k]];
-      const double l2 = norm2(pb - pa);
+      const std::uint32_t x = tri[(k + 1) % 3], y = tri[(k + 2) % 3];
+      const double l2 = norm2(surface.points[y] - surface.points[x]);
       if (!(l2 > 0)) continue;
-      const double lambda = dot(pm - pa, pb - pa) / l2;
-      if (!(lambda >= kFollowEnd && lambda <= 1 - kFollowEnd) ||
-          !(distance(pm, pa + (pb - pa) * lambda) <= kCapHeight * std::sqrt(l2)))
+      const Leaders l = along(surface, tri[k], x, y);
+      if (!(l.lambda >= kFollowEnd && l.lambda <= 1 - kFollowEnd) ||
+          !(norm(l.offset) <= kCapHeight * std::sqrt(l2)))
         continue;
       if (strip.empty()) {
         strip.assign(n_faces, UINT32_MAX);
@@ -157,12 +163,9 @@ std::vector<Leaders> find_followers(const SurfaceMesh& surface, const IndexLists
             std::lower_bound(cap_edges.begin(), cap_edges.end(), CapEdge{key, 0, false});
         if (at == cap_edges.end() || at->key != key || at->base) continue;
         const Triangle& cap = surface.triangles[at->face];
-        const Vec3d &pa = surface.points[cap[(apex[at->face] + 1) % 3]],
-                    &pb = surface.points[cap[(apex[at->face] + 2) % 3]];
-        const Vec3d& pm = surface.points[tri[(e + 2) % 3]];
-        const double lambda = dot(pm - pa, pb - pa) / norm2(pb - pa);
-        if (lambda > 0 && lambda < 1 &&
-            distance(pm, pa + (pb - pa) * lambda) <= kCapHeight * base[at->face]) {
+        const Leaders l = along(surface, tri[(e + 2) % 3], cap[(apex[at->face] + 1) % 3],
+                                cap[(apex[at->face] + 2) % 3]);
+        if (l.lambda > 0 && l.lambda < 1 && norm(l.offset) <= kCapHeight * base[at->face]) {
           if (strip[g] == UINT32_MAX) strip[g] = g;
           join(strip, g, at->face);
         }
@@ -184,29 +187,29 @@ std::vector<Leaders> find_followers(const SurfaceMesh& surface, const IndexLists
         if (base[f] > base[widest]) widest = f;
       }
       const Triangle& w = surface.triangles[widest];
-      const Vec3d along =
+      const Vec3d line =
           surface.points[w[(apex[widest] + 2) % 3]] - surface.points[w[(apex[widest] + 1) % 3]];
       std::sort(members.begin(), members.end());
       members.erase(std::unique(members.begin(), members.end()), members.end());
-      const auto at = [&](std::uint32_t v) { return dot(surface.points[v], along); };
+      const auto at = [&](std::uint32_t v) { return dot(surface.points[v], line); };
       std::uint32_t a = members.front(), b = members.front();
       for (const std::uint32_t v : members) {
         if (at(v) < at(a)) a = v;
         if (at(v) > at(b)) b = v;
       }
       if (a > b) std::swap(a, b);
-      const Vec3d &pa = surface.points[a], &pb = surface.points[b];
-      const double l2 = norm2(pb - pa);
-      bool fits = l2 > 0 && !follows(a) && !follows(b);
+      const Vec3d ab = surface.points[b] - surface.points[a];
+      bool fits = norm2(ab) > 0 && !follows(a) && !follows(b);
       std::vector<Leaders> strip_leaders;
       for (const std::uint32_t v : members) {
         if (!fits) break;
         if (v == a || v == b) continue;
-        const double lambda = dot(surface.points[v] - pa, pb - pa) / l2;
-        const Vec3d offset = surface.points[v] - (pa + (pb - pa) * lambda);
-        fits = lambda > 0 && lambda < 1 && norm(offset) <= kCapHeight * std::sqrt(l2) &&
+        Leaders l = along(surface, v, a, b);
+        fits = l.lambda > 0 && l.lambda < 1 && norm(l.offset) <= kCapHeight * norm(ab) &&
                !sector(v) && !follows(v) && !leader(v);
-        strip_leaders.push_back({a, b, lambda, offset, dot(pb - pa, along) > 0 ? 1 : -1, false});
+        l.turn = dot(ab, line) > 0 ? 1 : -1;
+        l.end = false;
+        strip_leaders.push_back(l);
       }
       if (fits) {
         std::size_t i = 0;
@@ -220,11 +223,10 @@ std::vector<Leaders> find_followers(const SurfaceMesh& surface, const IndexLists
         const std::uint32_t m = tri[apex[f]], x = tri[(apex[f] + 1) % 3],
                             y = tri[(apex[f] + 2) % 3];
         if (sector(m) || follows(m) || leader(m) || follows(x) || follows(y)) continue;
-        const std::uint32_t p = std::min(x, y), q = std::max(x, y);
-        const Vec3d &pp = surface.points[p], &pq = surface.points[q];
-        const double lambda = dot(surface.points[m] - pp, pq - pp) / norm2(pq - pp);
-        follow(m, {p, q, lambda, surface.points[m] - (pp + (pq - pp) * lambda), p == x ? 1 : -1,
-                   false});
+        Leaders l = along(surface, m, std::min(x, y), std::max(x, y));
+        l.turn = l.a == x ? 1 : -1;
+        l.end = false;
+        follow(m, l);
       }
     }
   }
@@ -289,15 +291,14 @@ std::vector<Leaders> find_followers(const SurfaceMesh& surface, const IndexLists
       double best_off = std::numeric_limits<double>::infinity();
       Leaders best;
       for (const std::uint32_t b : around) {
-        const Vec3d& pb = surface.points[b];
-        const double l2 = norm2(pb - pa);
-        const double lambda = l2 > 0 ? dot(surface.points[m] - pa, pb - pa) / l2 : 0.0;
-        if (!(lambda > 0 && lambda <= kFollowEnd)) continue;
-        const double off =
-            distance(surface.points[m], pa + (pb - pa) * lambda) / (lambda * std::sqrt(l2));
+        const double l2 = norm2(surface.points[b] - pa);
+        if (!(l2 > 0)) continue;
+        const Leaders l = along(surface, m, a, b);
+        if (!(l.lambda > 0 && l.lambda <= kFollowEnd)) continue;
+        const double off = norm(l.offset) / (l.lambda * std::sqrt(l2));
         if (off <= kFollowOffLine && off < best_off) {
           best_off = off;
-          best = {a, b, lambda, surface.points[m] - (pa + (pb - pa) * lambda)};
+          best = l;
         }
       }
       if (best.a == UINT32_MAX) continue;
@@ -647,7 +648,7 @@ class ShellSearch {
   std::uint32_t order(std::uint32_t v) const { return order_.empty() ? v : order_[v]; }
   /// LocalPrism's id of the inner vertex whose key vertex has order o.
   std::uint32_t inner_key(std::uint32_t o) const {
-    return static_cast<std::uint32_t>(layers_) * static_cast<std::uint32_t>(full_.size()) + o;
+    return inner_point_key(static_cast<std::uint32_t>(full_.size()), layers_, o);
   }
 
   /// v's inner vertex in `s`: its id in LocalPrism's numbering (below n: on the surface) and its
@@ -706,7 +707,7 @@ class ShellSearch {
       inner_vertex(s, v, inner, inner_at);
       for (int k = 1; k < K; ++k) {
         const std::size_t at = 3 * static_cast<std::size_t>(k) + c;
-        p.ids[at] = inner < n ? inner : n + (K - 1) * order(v) + k - 1;
+        p.ids[at] = inner < n ? inner : layer_point_key(n, K, order(v), k);
         p.at[at] = sv + (inner_at - sv) * layer_at_[k];
       }
     }
