@@ -49,6 +49,12 @@ constexpr double kCapHeight = 1e-2;
 /// Faces of a lower shape quality are slivers (ShellSearch::quality_demand()).
 constexpr double kSliverShape = 0.1;
 
+/// A tet below --min-quality whose longest edge is this many times its deepest inner corner's
+/// depth is flat: it steps back only where that can bring it to the demand, or where every inner
+/// corner is within kFlatFloors floors of the surface (ShellSearch::below_curable_quality()).
+constexpr double kFlatEdges = 8;
+constexpr double kFlatFloors = 4;
+
 /// The vertices of a follower's inner vertex: lambda along a' -> b' (a.k.a. m' above), moved
 /// by `offset`, its own offset from the segment ab.
 struct Leaders {
@@ -413,6 +419,7 @@ class ShellSearch {
     floor_fraction_ = options.floor_fraction;
     floor_drop_ = options.floor_drop;
     layers_ = options.layers;
+    shrink_ = options.shrink;
     layer_at_ = layer_fractions(options.layers, options.layer_ratio);
     update_caps();
   }
@@ -637,6 +644,10 @@ class ShellSearch {
     std::vector<Vec3d> at;
     std::vector<Tet> tets;
     bool cap = false;  ///< one tet to a cap point (ids[3])
+    /// Per corner: its vertex's arc length (0 when it follows or is on the surface) and whether
+    /// it is welded.
+    std::array<double, 3> arc{};
+    std::array<bool, 3> welded{};
     std::array<Vec3d, 4> corners(const Tet& t) const {
       std::array<Vec3d, 4> p;
       for (int c = 0; c < 4; ++c) p[c] = at[std::find(ids.begin(), ids.end(), t[c]) - ids.begin()];
@@ -702,6 +713,8 @@ class ShellSearch {
       const Vec3d& sv = surface_.points[v];
       p.ids[c] = order(v);
       p.at[c] = sv;
+      p.arc[c] = follows(v) ? 0.0 : s.t[v];
+      p.welded[c] = s.welded[v];
       std::uint32_t& inner = p.ids[3 * K + c];
       Vec3d& inner_at = p.at[3 * K + c];
       inner_vertex(s, v, inner, inner_at);
@@ -835,7 +848,7 @@ class ShellSearch {
     for (const Tet& t : p.tets) {
       const std::array<Vec3d, 4> c = p.corners(t);
       if ((tet_volume_class(c, zero_volume_tolerance) != TetVolume::kPositive ||
-           tet_quality(c[0], c[1], c[2], c[3]) < quality) &&
+           below_curable_quality(p, t, c, quality)) &&
           visit(t))
         return;
     }
@@ -843,9 +856,56 @@ class ShellSearch {
     const std::uint32_t* inner = p.ids.data() + 3 * layers_;
     const PrismTets own = split_prism({p.ids[0], p.ids[1], p.ids[2], inner[0], inner[1], inner[2]});
     for (int i = 0; i < own.count; ++i) {
-      const std::array<Vec3d, 4> c = p.corners(own.tets[i]);
-      if (tet_quality(c[0], c[1], c[2], c[3]) < min_quality && visit(own.tets[i])) return;
+      if (below_curable_quality(p, own.tets[i], p.corners(own.tets[i]), min_quality) &&
+          visit(own.tets[i]))
+        return;
     }
+  }
+
+  /// Whether tet `t` of `p` (corners `c`) is below `quality` and stepping back may bring it
+  /// there. A needle (traces converging, or deep for their triangle) gains quality fast as its
+  /// inner corners step back. A flat tet, whose longest edge is kFlatEdges times its deepest
+  /// inner corner's depth or more (a coarse CAD face over a thin part), can stay far below
+  /// `quality` however far its corners step back: stepped back all the same, it thinned the
+  /// shell around it down to the floors for a quality it could not reach. So a flat tet steps
+  /// back only where the gain of one step of every inner corner along its trace, kept up,
+  /// reaches `quality` before the deepest corner's floor; or where every inner corner is within
+  /// kFlatFloors floors of the surface (a step costs little depth there, and the quality of so
+  /// flat a tet hangs on its corners' small offsets); or where a corner follows (its leaders'
+  /// steps are not modelled here). Otherwise it is left as it is: its volume is positive.
+  bool below_curable_quality(const LocalPrism& p, const Tet& t, std::array<Vec3d, 4> c,
+                             double quality) const {
+    const double q = tet_quality(c[0], c[1], c[2], c[3]);
+    if (!(q < quality)) return false;
+    if (p.cap || !(q > 0)) return true;
+    const auto n = static_cast<std::uint32_t>(full_.size());
+    const Triangle& tri = surface_.triangles[p.face];
+    double longest = 0, deepest = 0, steps = 0;
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j) longest = std::max(longest, distance(c[i], c[j]));
+    bool near_floor = true;
+    for (int i = 0; i < 4; ++i) {
+      if (t[i] < n) continue;
+      const auto at = std::find(p.ids.begin(), p.ids.end(), t[i]) - p.ids.begin();
+      const auto column = at % 3;
+      const std::uint32_t v = tri[column];
+      const Vec3d& sv = surface_.points[v];
+      const double depth = distance(c[i], sv);
+      deepest = std::max(deepest, depth);
+      near_floor = near_floor && depth < kFlatFloors * floor_[v];
+      const double arc = p.arc[column];
+      if (arc == 0) return true;  // follows
+      if (arc > floor_[v]) steps = std::max(steps, std::log(floor_[v] / arc) / std::log(shrink_));
+      // One step back: a welded vertex leaves its weld for its own trace, any other goes to
+      // max(floor, shrink * t), as step_back() moves it; a layer point moves with it.
+      const Vec3d inner =
+          p.welded[column] ? position(v, arc) : position(v, std::max(floor_[v], arc * shrink_));
+      const auto level = static_cast<int>(at / 3);
+      c[i] = level == layers_ ? inner : sv + (inner - sv) * layer_at_[level];
+    }
+    if (near_floor || longest < kFlatEdges * deepest) return true;
+    const double stepped = tet_quality(c[0], c[1], c[2], c[3]);
+    return stepped > q && std::log(quality / q) <= (steps + 1) * std::log(stepped / q);
   }
 
   /// The share of --min-quality a prism on face f is settled to: 1, or on a sliver face its shape
@@ -1072,6 +1132,7 @@ class ShellSearch {
   double floor_fraction_ = 0;             ///< ValidityOptions::floor_fraction
   double floor_drop_ = 1;                 ///< ValidityOptions::floor_drop
   int layers_ = 1;                        ///< ValidityOptions::layers
+  double shrink_ = 1;                     ///< ValidityOptions::shrink
   std::vector<double> layer_at_;          ///< layer_fractions() of the layers
   std::map<std::uint32_t, int> cap_drops_;  ///< per cap face: how often its depth was dropped
   std::vector<int> drops_;                  ///< per vertex: how often its floor was lowered

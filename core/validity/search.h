@@ -46,7 +46,8 @@
 // the twist of their side quad), in which the sliver prisms between a and m cut their two
 // nearly coincident side quads alike and a cap's prism lies on the side its base quad bends
 // to (details in docs/validity.md). A prism on a sliver face is settled only down to a quality
-// in proportion to its face's shape.
+// in proportion to its face's shape, and a flat tet (far longer than deep, as under a coarse
+// CAD face over a thin wall) only where stepping back can raise it to the quality.
 // Last, inner vertices within 1e-8 of the surface's diagonal of each other (traces that met at
 // one point and left their weld) step back apart, their floors dropped when at them, and the
 // rounds run again: readers that weld duplicate positions would see non-manifold faces.
