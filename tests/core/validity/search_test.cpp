@@ -285,6 +285,35 @@ TEST(Validity, CapsApexesFollowTheirBases) {
     }
 }
 
+TEST(Validity, ACapOverAThinWallDoesNotFollowItsBase) {
+  // A block 50 x 50 x 10 with a slot 10 wide whose floor is 0.2 thick, as CAD exporters
+  // triangulate its ends: the slot's floor corner (30, 0.2) is the apex of a sliver over the
+  // block's whole bottom edge, 0.2 / 50 = 0.004 of it high, a cap. Following that base, its
+  // inner vertex went where the base's ends go in, up out of the floor: exit 3, invalid even at
+  // the floors. The ends' ways in, blended, point out of the floor's faces at the apex, so it
+  // keeps its own trace.
+  const std::vector<std::array<double, 2>> profile = {{0, 0},    {50, 0},   {50, 10}, {30, 10},
+                                                      {30, 0.2}, {20, 0.2}, {20, 10}, {0, 10}};
+  const std::vector<Triangle> end = {{0, 1, 4}, {1, 2, 4}, {2, 3, 4},
+                                     {0, 4, 5}, {0, 5, 6}, {0, 6, 7}};
+  const auto n = static_cast<std::uint32_t>(profile.size());
+  SurfaceMesh block;
+  for (const double y : {0.0, 50.0})
+    for (const auto& [x, z] : profile) block.points.push_back({x, y, z});
+  for (const Triangle& t : end) {
+    block.triangles.push_back(t);  // facing -y
+    block.triangles.push_back({n + t[0], n + t[2], n + t[1]});
+  }
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const std::uint32_t j = (i + 1) % n;
+    block.triangles.push_back({j, i, n + i});
+    block.triangles.push_back({j, n + i, n + j});
+  }
+  const ShellRun r = shell_of(block, "slotted block", 64);
+  expect_valid(r, "slotted block");
+  EXPECT_EQ(r.report["validity"]["following_vertices"], 0);
+}
+
 TEST(Validity, SharedMeshesValidAndSameForOneAndTwoThreads) {
   const auto meshes = test::shared_meshes_dir();
   if (meshes.empty()) GTEST_SKIP() << "../shared/meshes is absent";
