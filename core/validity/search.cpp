@@ -74,17 +74,24 @@ Leaders along(const SurfaceMesh& surface, std::uint32_t m, std::uint32_t a, std:
   return {a, b, lambda, surface.points[m] - (pa + (pb - pa) * lambda)};
 }
 
+/// Corner k of `tri` against the opposite side (along()) in `l`: whether the side has a length
+/// and the corner lies within kCapHeight of it from the side's line.
+bool near_side(const SurfaceMesh& surface, const Triangle& tri, int k, Leaders& l) {
+  const std::uint32_t x = tri[(k + 1) % 3], y = tri[(k + 2) % 3];
+  const double l2 = norm2(surface.points[y] - surface.points[x]);
+  if (!(l2 > 0)) return false;
+  l = along(surface, tri[k], x, y);
+  return norm(l.offset) <= kCapHeight * std::sqrt(l2);
+}
+
 /// Whether some corner of face f lies within kCapHeight times the opposite side's length of that
-/// side (a cap, of any apex, or a needle of a strip).
+/// side (a cap, of any apex, or a needle of a strip), or f has no area.
 bool cap_like(const SurfaceMesh& surface, std::uint32_t f) {
-  const Triangle& tri = surface.triangles[f];
-  for (int k = 0; k < 3; ++k) {
-    const std::uint32_t x = tri[(k + 1) % 3], y = tri[(k + 2) % 3];
-    const double l2 = norm2(surface.points[y] - surface.points[x]);
-    if (!(l2 > 0)) return true;
-    const Leaders l = along(surface, tri[k], x, y);
-    if (l.lambda >= 0 && l.lambda <= 1 && norm(l.offset) <= kCapHeight * std::sqrt(l2)) return true;
-  }
+  if (!(norm2(face_normal_area(surface, f)) > 0)) return true;
+  Leaders l;
+  for (int k = 0; k < 3; ++k)
+    if (near_side(surface, surface.triangles[f], k, l) && l.lambda >= 0 && l.lambda <= 1)
+      return true;
   return false;
 }
 
@@ -142,12 +149,10 @@ std::vector<Leaders> find_followers(const SurfaceMesh& surface, const IndexLists
   for (std::uint32_t f = 0; f < n_faces; ++f)
     for (int k = 0; k < 3; ++k) {
       const Triangle& tri = surface.triangles[f];
-      const std::uint32_t x = tri[(k + 1) % 3], y = tri[(k + 2) % 3];
-      const double l2 = norm2(surface.points[y] - surface.points[x]);
-      if (!(l2 > 0)) continue;
-      const Leaders l = along(surface, tri[k], x, y);
-      if (!(l.lambda >= kFollowEnd && l.lambda <= 1 - kFollowEnd) ||
-          !(norm(l.offset) <= kCapHeight * std::sqrt(l2)) || !inward(tri[k], x, y, l.lambda))
+      Leaders l;
+      if (!near_side(surface, tri, k, l) ||
+          !(l.lambda >= kFollowEnd && l.lambda <= 1 - kFollowEnd) ||
+          !inward(tri[k], l.a, l.b, l.lambda))
         continue;
       if (strip.empty()) {
         strip.assign(n_faces, UINT32_MAX);
@@ -155,7 +160,7 @@ std::vector<Leaders> find_followers(const SurfaceMesh& surface, const IndexLists
         apex.assign(n_faces, 0);
       }
       strip[f] = f;
-      base[f] = std::sqrt(l2);
+      base[f] = distance(surface.points[l.a], surface.points[l.b]);
       apex[f] = k;
       for (int e = 0; e < 3; ++e) {  // the base, (k + 1, k + 2), marked
         const std::uint32_t u = tri[e], w = tri[(e + 1) % 3];
@@ -672,10 +677,6 @@ class ShellSearch {
     std::vector<Vec3d> at;
     std::vector<Tet> tets;
     bool cap = false;  ///< one tet to a cap point (ids[3])
-    /// Per corner: its vertex's arc length (0 when it follows or is on the surface) and whether
-    /// it is welded.
-    std::array<double, 3> arc{};
-    std::array<bool, 3> welded{};
     std::array<Vec3d, 4> corners(const Tet& t) const {
       std::array<Vec3d, 4> p;
       for (int c = 0; c < 4; ++c) p[c] = at[std::find(ids.begin(), ids.end(), t[c]) - ids.begin()];
@@ -741,8 +742,6 @@ class ShellSearch {
       const Vec3d& sv = surface_.points[v];
       p.ids[c] = order(v);
       p.at[c] = sv;
-      p.arc[c] = follows(v) ? 0.0 : s.t[v];
-      p.welded[c] = s.welded[v];
       std::uint32_t& inner = p.ids[3 * K + c];
       Vec3d& inner_at = p.at[3 * K + c];
       inner_vertex(s, v, inner, inner_at);
@@ -838,7 +837,7 @@ class ShellSearch {
             LocalPrism p;
             for (std::size_t i = begin; i != end; ++i) {
               prism(s, queue[i], p);
-              settled[i] = !has_unsettled_tet(p, zero_volume_tolerance, min_quality);
+              settled[i] = !has_unsettled_tet(s, p, zero_volume_tolerance, min_quality);
             }
           },
           256);
@@ -868,15 +867,15 @@ class ShellSearch {
   /// `min_quality`; with K layers, those not positive or below min_quality / K, then, the prism's
   /// own 3 tets (split_prism() of its outer and inner triangles) below `min_quality`.
   template <class Visit>
-  void for_each_unsettled_tet(const LocalPrism& p, double zero_volume_tolerance, double min_quality,
-                              const Visit& visit) const {
+  void for_each_unsettled_tet(const State& s, const LocalPrism& p, double zero_volume_tolerance,
+                              double min_quality, const Visit& visit) const {
     const bool whole = layers_ == 1 || p.cap;  // p.tets are the prism's own 3 tets
     if (min_quality > 0) min_quality *= quality_demand(p.face);
     const double quality = whole ? min_quality : min_quality / layers_;
     for (const Tet& t : p.tets) {
       const std::array<Vec3d, 4> c = p.corners(t);
       if ((tet_volume_class(c, zero_volume_tolerance) != TetVolume::kPositive ||
-           below_curable_quality(p, t, c, quality)) &&
+           below_curable_quality(s, p, t, c, quality)) &&
           visit(t))
         return;
     }
@@ -884,15 +883,15 @@ class ShellSearch {
     const std::uint32_t* inner = p.ids.data() + 3 * layers_;
     const PrismTets own = split_prism({p.ids[0], p.ids[1], p.ids[2], inner[0], inner[1], inner[2]});
     for (int i = 0; i < own.count; ++i) {
-      if (below_curable_quality(p, own.tets[i], p.corners(own.tets[i]), min_quality) &&
+      if (below_curable_quality(s, p, own.tets[i], p.corners(own.tets[i]), min_quality) &&
           visit(own.tets[i]))
         return;
     }
   }
 
-  /// Whether tet `t` of `p` (corners `c`) is below `quality` and stepping back may bring it
-  /// there. A needle (traces converging, or deep for their triangle) gains quality fast as its
-  /// inner corners step back. A flat tet, whose longest edge is kFlatEdges times its deepest
+  /// Whether tet `t` of `p`, prism of `s` (corners `c`), is below `quality` and stepping back may
+  /// bring it there. A needle (traces converging, or deep for their triangle) gains quality fast as
+  /// its inner corners step back. A flat tet, whose longest edge is kFlatEdges times its deepest
   /// inner corner's depth or more (a coarse CAD face over a thin part), can stay far below
   /// `quality` however far its corners step back: stepped back all the same, it thinned the
   /// shell around it down to the floors for a quality it could not reach. So a flat tet steps
@@ -901,8 +900,8 @@ class ShellSearch {
   /// kFlatFloors floors of the surface (a step costs little depth there, and the quality of so
   /// flat a tet hangs on its corners' small offsets); or where a corner follows (its leaders'
   /// steps are not modelled here). Otherwise it is left as it is: its volume is positive.
-  bool below_curable_quality(const LocalPrism& p, const Tet& t, std::array<Vec3d, 4> c,
-                             double quality) const {
+  bool below_curable_quality(const State& s, const LocalPrism& p, const Tet& t,
+                             std::array<Vec3d, 4> c, double quality) const {
     const double q = tet_quality(c[0], c[1], c[2], c[3]);
     if (!(q < quality)) return false;
     if (p.cap || !(q > 0)) return true;
@@ -921,13 +920,13 @@ class ShellSearch {
       const double depth = distance(c[i], sv);
       deepest = std::max(deepest, depth);
       near_floor = near_floor && depth < kFlatFloors * floor_[v];
-      const double arc = p.arc[column];
-      if (arc == 0) return true;  // follows
+      if (follows(v)) return true;
+      const double arc = s.t[v];
       if (arc > floor_[v]) steps = std::max(steps, std::log(floor_[v] / arc) / std::log(shrink_));
       // One step back: a welded vertex leaves its weld for its own trace, any other goes to
       // max(floor, shrink * t), as step_back() moves it; a layer point moves with it.
       const Vec3d inner =
-          p.welded[column] ? position(v, arc) : position(v, std::max(floor_[v], arc * shrink_));
+          s.welded[v] ? position(v, arc) : position(v, std::max(floor_[v], arc * shrink_));
       const auto level = static_cast<int>(at / 3);
       c[i] = level == layers_ ? inner : sv + (inner - sv) * layer_at_[level];
     }
@@ -950,10 +949,10 @@ class ShellSearch {
   }
 
   /// Whether for_each_unsettled_tet() visits a tet of `p`.
-  bool has_unsettled_tet(const LocalPrism& p, double zero_volume_tolerance,
+  bool has_unsettled_tet(const State& s, const LocalPrism& p, double zero_volume_tolerance,
                          double min_quality) const {
     bool found = false;
-    for_each_unsettled_tet(p, zero_volume_tolerance, min_quality,
+    for_each_unsettled_tet(s, p, zero_volume_tolerance, min_quality,
                            [&](const Tet&) { return found = true; });
     return found;
   }
@@ -966,7 +965,7 @@ class ShellSearch {
   void lower_raised(State& s, const std::vector<double>& before, std::vector<std::uint32_t> queue,
                     double zero_volume_tolerance, double min_quality) const {
     const auto send_back = [&](const LocalPrism& p, const auto& again) {
-      if (!has_unsettled_tet(p, zero_volume_tolerance, min_quality)) return;
+      if (!has_unsettled_tet(s, p, zero_volume_tolerance, min_quality)) return;
       for (const std::uint32_t corner : surface_.triangles[p.face])
         for_each_mover(corner, [&](std::uint32_t v) {
           if (s.t[v] == before[v]) return;
@@ -992,7 +991,7 @@ class ShellSearch {
     std::size_t unwelded = 0;
     // The first offending tet with a movable corner steps back; the prism is queued again.
     const auto step_first = [&](const LocalPrism& p, const auto& again) {
-      for_each_unsettled_tet(p, zero_volume_tolerance, min_quality, [&](const Tet& t) {
+      for_each_unsettled_tet(s, p, zero_volume_tolerance, min_quality, [&](const Tet& t) {
         const std::uint32_t v = deepest_corner(s, p, t);
         if (v == UINT32_MAX) return false;  // at the floor: left to the checks
         unwelded += step_back(s, v, shrink, [&](std::uint32_t u) {
