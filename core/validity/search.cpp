@@ -84,23 +84,22 @@ bool near_side(const SurfaceMesh& surface, const Triangle& tri, int k, Leaders& 
   return norm(l.offset) <= kCapHeight * std::sqrt(l2);
 }
 
-/// Whether some corner of face f lies within kCapHeight times the opposite side's length of that
-/// side (a cap, of any apex, or a needle of a strip), or f has no area.
-bool cap_like(const SurfaceMesh& surface, std::uint32_t f) {
-  if (!(norm2(face_normal_area(surface, f)) > 0)) return true;
-  Leaders l;
-  for (int k = 0; k < 3; ++k)
-    if (near_side(surface, surface.triangles[f], k, l) && l.lambda >= 0 && l.lambda <= 1)
-      return true;
-  return false;
+/// Whether every corner of face f lies within kCapHeight |ab| of the line through a and b: one
+/// of the caps (or needles) along ab, whose normal its apexes' hair-thin offsets decide.
+bool along_base(const SurfaceMesh& surface, std::uint32_t f, std::uint32_t a, std::uint32_t b) {
+  const double height = kCapHeight * distance(surface.points[a], surface.points[b]);
+  for (const std::uint32_t u : surface.triangles[f])
+    if (u != a && u != b && !(norm(along(surface, u, a, b).offset) <= height)) return false;
+  return true;
 }
 
 /// Per vertex of `surface`: its leaders, or none (a = UINT32_MAX); empty when no vertex follows.
 /// Two kinds, strips first: the vertices of strips of caps (kCapHeight) but their ends, then a
 /// cluster's members next to an edge's end (kClusterEdge). Leaders are vertices that follow
 /// none, and none of them is in a cluster but as its root. Sectors (`start.constraints`)
-/// follow nothing and join no cluster. A cap's apex m follows its base (a, b) only where
-/// `inward(m, a, b, lambda)`: the way a and b go in, blended at lambda, goes in at m too.
+/// follow nothing and join no cluster. A cap's apex m follows its base (a, b), and a strip's
+/// vertex m its ends a and b, only where `inward(m, a, b)`: the ways a and b go in each go in
+/// at m too.
 template <class Inward>
 std::vector<Leaders> find_followers(const SurfaceMesh& surface, const IndexLists& faces,
                                     const InnerVertices& start, const Inward& inward) {
@@ -151,8 +150,7 @@ std::vector<Leaders> find_followers(const SurfaceMesh& surface, const IndexLists
       const Triangle& tri = surface.triangles[f];
       Leaders l;
       if (!near_side(surface, tri, k, l) ||
-          !(l.lambda >= kFollowEnd && l.lambda <= 1 - kFollowEnd) ||
-          !inward(tri[k], l.a, l.b, l.lambda))
+          !(l.lambda >= kFollowEnd && l.lambda <= 1 - kFollowEnd) || !inward(tri[k], l.a, l.b))
         continue;
       if (strip.empty()) {
         strip.assign(n_faces, UINT32_MAX);
@@ -233,7 +231,7 @@ std::vector<Leaders> find_followers(const SurfaceMesh& surface, const IndexLists
         if (v == a || v == b) continue;
         Leaders l = along(surface, v, a, b);
         fits = l.lambda > 0 && l.lambda < 1 && norm(l.offset) <= kCapHeight * norm(ab) &&
-               !sector(v) && !follows(v) && !leader(v);
+               !sector(v) && !follows(v) && !leader(v) && inward(v, a, b);
         l.turn = dot(ab, line) > 0 ? 1 : -1;
         l.end = false;
         strip_leaders.push_back(l);
@@ -395,16 +393,20 @@ class ShellSearch {
       const bool sector = v < start.constraints.size() && !start.constraints[v].empty();
       folds[v] = std::max(margin, safe_margin) < (sector ? kSectorMargin : kFoldMargin);
     }
-    // A cap's apex follows its base only where the base ends' first directions, blended, go
-    // inward at the apex too (for its faces but the cap-like ones, whose normals the apex's
-    // hair-thin offset decides): the corner of a slot's floor 0.2 thick, apex of a sliver 250
-    // times longer than high along the part's far bottom edge, followed that edge's ends up
-    // out of the floor.
-    const auto inward = [&](std::uint32_t m, std::uint32_t a, std::uint32_t b, double lambda) {
-      const Vec3d d =
-          (fallback_[a] + correction_[a]) * (1 - lambda) + (fallback_[b] + correction_[b]) * lambda;
-      for (const std::uint32_t f : faces_[m])
-        if (!cap_like(surface, f) && !(dot(face_normal_area(surface, f), d) < 0)) return false;
+    // A cap's apex m follows its base (a, b) only where a's first direction and b's each go
+    // inward at m, for m's faces but those along the base (whose normals m's hair-thin offset
+    // decides): m's inner point lies off m by a positive mix of the two, weighted by a's and b's
+    // depths, which the search sets apart (a slot's floor corner, apex of a sliver 250 times
+    // longer than high along a part's far bottom edge, followed that edge's ends up out of the
+    // 0.2 floor; the lowest points of channels over a 0.2 floor, apexes of a fan of such slivers
+    // from the part's corner, followed the corner up where its floor was the deeper).
+    const auto inward = [&](std::uint32_t m, std::uint32_t a, std::uint32_t b) {
+      for (const std::uint32_t e : {a, b}) {
+        const Vec3d d = fallback_[e] + correction_[e];
+        for (const std::uint32_t f : faces_[m])
+          if (!along_base(surface, f, a, b) && !(dot(face_normal_area(surface, f), d) < 0))
+            return false;
+      }
       return true;
     };
     leaders_ = find_followers(surface, faces_, start, inward);
