@@ -551,4 +551,32 @@ SurfaceMesh with_caps(const SurfaceMesh& mesh, std::size_t every, double height,
   return out;
 }
 
+SurfaceMesh with_vertices_near_corners(const SurfaceMesh& mesh, std::size_t every, double distance,
+                                       std::vector<InsertedVertex>& inserted) {
+  SurfaceMesh out = mesh;
+  out.triangles.clear();
+  std::vector<char> split(mesh.points.size(), 0);
+  std::size_t turn = 0;
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+    const Triangle& tri = mesh.triangles[f];
+    if (f % every != 0 || split[tri[0]] || split[tri[1]] || split[tri[2]]) {
+      out.triangles.push_back(tri);
+      continue;
+    }
+    const int k = static_cast<int>(turn % 3);
+    const double mix = 0.3 + 0.2 * static_cast<double>(turn++ % 3);
+    const std::uint32_t a = tri[k], b = tri[(k + 1) % 3], c = tri[(k + 2) % 3];
+    const Vec3d &pa = mesh.points[a], &pb = mesh.points[b], &pc = mesh.points[c];
+    const Vec3d into = normalized(normalized(pb - pa) * mix + normalized(pc - pa) * (1 - mix));
+    const auto m = static_cast<std::uint32_t>(out.points.size());
+    out.points.push_back(pa + into * (distance * std::min(norm(pb - pa), norm(pc - pa))));
+    inserted.push_back({m, a, a, distance});
+    for (const std::uint32_t v : tri) split[v] = 1;
+    out.triangles.push_back({a, b, m});
+    out.triangles.push_back({b, c, m});
+    out.triangles.push_back({c, a, m});
+  }
+  return out;
+}
+
 }  // namespace vdb_shell::test

@@ -121,4 +121,13 @@ SurfaceMesh with_vertices_near_edge_ends(const SurfaceMesh& mesh, std::size_t ev
 SurfaceMesh with_caps(const SurfaceMesh& mesh, std::size_t every, double height,
                       std::size_t vertices, std::vector<InsertedVertex>& inserted);
 
+/// `mesh` with a vertex m next to a corner a of every `every`-th face (a, b, c) whose corners
+/// no split face has (the corner taking turns among the three): `distance` times the shorter
+/// of the edges (a, b), (a, c) from a, into the face between them (the two edges' directions
+/// mixed 0.3 / 0.7, 0.5 / 0.5, 0.7 / 0.3 by turns: off both edges' lines); the face becomes
+/// (a, b, m), (b, c, m), (c, a, m). Appends the new vertices to `inserted` (near = far = a,
+/// t = distance).
+SurfaceMesh with_vertices_near_corners(const SurfaceMesh& mesh, std::size_t every, double distance,
+                                       std::vector<InsertedVertex>& inserted);
+
 }  // namespace vdb_shell::test

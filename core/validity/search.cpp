@@ -40,6 +40,9 @@ constexpr double kClusterEdge = 1e-2;
 /// line through a and b.
 constexpr double kFollowEnd = 1e-2;
 constexpr double kFollowOffLine = 1e-2;
+/// A member m on no such line follows its cluster's root a alone, at its offset from a, when
+/// |am| <= this times the longest edge at a and at m: the two are nearly one.
+constexpr double kNearlyOne = 1e-3;
 
 /// A face (a, b, m) whose corner m lies within this fraction of |ab| of the segment ab, between
 /// its ends (lambda in [kFollowEnd, 1 - kFollowEnd]), is a cap: m follows a and b
@@ -87,6 +90,7 @@ bool near_side(const SurfaceMesh& surface, const Triangle& tri, int k, Leaders& 
 /// Whether every corner of face f lies within kCapHeight |ab| of the line through a and b: one
 /// of the caps (or needles) along ab, whose normal its apexes' hair-thin offsets decide.
 bool along_base(const SurfaceMesh& surface, std::uint32_t f, std::uint32_t a, std::uint32_t b) {
+  if (a == b) return false;
   const double height = kCapHeight * distance(surface.points[a], surface.points[b]);
   for (const std::uint32_t u : surface.triangles[f])
     if (u != a && u != b && !(norm(along(surface, u, a, b).offset) <= height)) return false;
@@ -326,7 +330,16 @@ std::vector<Leaders> find_followers(const SurfaceMesh& surface, const IndexLists
           best = l;
         }
       }
-      if (best.a == UINT32_MAX) continue;
+      if (best.a == UINT32_MAX) {
+        // On no such segment (vertices nearly one, in general position): m's inner point is
+        // a's moved by m - a, where a's way in goes in at m. Traces of their own would cross
+        // over so short an edge, and its floors put the tets there below the zero-volume
+        // tolerance.
+        const double l2 = norm2(surface.points[m] - pa);
+        if (!(l2 <= kNearlyOne * kNearlyOne * std::min(longest[a], longest[m])) || !inward(m, a, a))
+          continue;
+        best = Leaders{a, a, 0.0, surface.points[m] - pa};
+      }
       for (const std::uint32_t f : faces[m]) {  // m is the apex of a cap on ab too
         const Triangle& tri = surface.triangles[f];
         const int k = static_cast<int>(std::find(tri.begin(), tri.end(), m) - tri.begin());
@@ -618,7 +631,7 @@ class ShellSearch {
   void for_each_mover(std::uint32_t v, const F& f) const {
     if (!follows(v)) return f(v);
     f(leaders_[v].a);
-    f(leaders_[v].b);
+    if (leaders_[v].b != leaders_[v].a) f(leaders_[v].b);
   }
   /// How deep v's inner vertex can still move back: a welded group's depth, t_v above the
   /// floor, 0 at the floor or on the surface; a follower's, its deeper leader's.
@@ -707,7 +720,7 @@ class ShellSearch {
       if (ia < n && ib < n) {
         id = order(v);
         at = surface_.points[v];
-      } else if (ia == ib) {  // one weld group: a separate point there would coincide
+      } else if (ia == ib && l.a != l.b) {  // one weld group: a separate point would coincide
         id = ia;
         at = pa;
         return l.a;

@@ -257,6 +257,28 @@ TEST(Validity, VerticesNextToAnEdgesEndFollowTheEdgesEnds) {
   }
 }
 
+TEST(Validity, VerticesNearlyOneFollowInAnyDirection) {
+  // A vertex 1e-5 of its face's edges from a corner, off both edges' lines (as rounding leaves
+  // CAD exports' intersections), joins the corner's cluster but lies on no segment from it: a
+  // trace of its own crossed the corner's over so short an edge, and its floor put the tets
+  // there below the zero-volume tolerance (exit 3 on every such shape). Its inner point is now
+  // the corner's moved by the same offset.
+  for (const char* name : {"sphere", "box", "torus"}) {
+    std::vector<test::InsertedVertex> inserted;
+    const SurfaceMesh plain = make_shape(name, 2);
+    const SurfaceMesh mesh = test::with_vertices_near_corners(plain, 3, 1e-5, inserted);
+    ASSERT_GE(inserted.size(), 20u) << name;
+    std::vector<Vec3d> inner;
+    ASSERT_TRUE(shell_with_followers(plain, mesh, name, inserted.size(), inner));
+    const double tolerance = 1e-9 * bounding_box(mesh).diagonal();
+    for (const test::InsertedVertex& m : inserted)
+      EXPECT_LT(
+          distance(inner[m.vertex], inner[m.near] + (mesh.points[m.vertex] - mesh.points[m.near])),
+          tolerance)
+          << name << ": vertex " << m.vertex << " next to " << m.near;
+  }
+}
+
 TEST(Validity, CapsApexesFollowTheirBases) {
   // A cap, a face whose corner m lies 1e-6 of its base (a, b) off that edge, had a prism as thin
   // as the cap between the side quad (a, b) and the quads (a, m), (m, b): with m's own trace it
