@@ -172,13 +172,24 @@ bool surface_triangles_cross(const SurfaceMesh& surface, std::uint32_t f, std::u
   const Triangle& tb = surface.triangles[g];
   int shared = 0;
   for (const std::uint32_t u : ta) shared += (u == tb[0]) + (u == tb[1]) + (u == tb[2]);
-  if (shared >= 2) return false;
+  if (shared > 2) return false;
   const std::array<Vec3d, 3> a = triangle_corners(surface, f);
   const std::array<Vec3d, 3> b = triangle_corners(surface, g);
   const double tol = ShellCheckOptions{}.overlap_tolerance *
                      std::max({distance(a[0], a[1]), distance(a[1], a[2]), distance(a[2], a[0]),
                                distance(b[0], b[1]), distance(b[1], b[2]), distance(b[2], b[0])});
-  return triangles_cross(a, b, tol);
+  if (shared < 2) return triangles_cross(a, b, tol);
+  // Two faces of an edge cross where one folds back onto the other: their third corners on one
+  // side of the edge, the nearer one to the edge within tol of the other's plane (a sliver that
+  // rounding turned over, as CAD exports leave).
+  int k = 0, j = 0;
+  while (std::find(tb.begin(), tb.end(), ta[k]) != tb.end()) ++k;
+  while (std::find(ta.begin(), ta.end(), tb[j]) != ta.end()) ++j;
+  const Vec3d &u = a[(k + 1) % 3], along = normalized(a[(k + 2) % 3] - u);
+  const auto off_edge = [&](const Vec3d& x) { return (x - u) - along * dot(x - u, along); };
+  const Vec3d p = off_edge(a[k]), q = off_edge(b[j]);
+  const double np = norm(p), nq = norm(q);
+  return dot(p, q) > 0 && norm(cross(p, q)) <= tol * std::max(np, nq);
 }
 
 std::string format_list(const std::vector<std::uint32_t>& list) {
@@ -295,10 +306,14 @@ Vec3d triangles_crossing_point(const SurfaceMesh& surface, std::uint32_t f, std:
   };
   Vec3d x;
   if (edge_through(a, b, x) || edge_through(b, a, x)) return x;
+  // (Not a corner they share: a face folded back onto its neighbour has its third one there.)
+  const auto corner_of = [](const std::array<Vec3d, 3>& t, const Vec3d& x) {
+    return std::find(t.begin(), t.end(), x) != t.end();
+  };
   for (const Vec3d& p : a)
-    if (inside(b, p)) return p;
+    if (!corner_of(b, p) && inside(b, p)) return p;
   for (const Vec3d& p : b)
-    if (inside(a, p)) return p;
+    if (!corner_of(a, p) && inside(a, p)) return p;
   return ((a[0] + a[1] + a[2]) + (b[0] + b[1] + b[2])) / 6.0;
 }
 

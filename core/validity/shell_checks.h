@@ -169,14 +169,15 @@ class ShellChecker {
 
 /// Pairs of surface triangles (i, j), i < j, whose interiors cross: the surface intersects
 /// itself and bounds no single volume. Triangles that only touch (a shared vertex or edge
-/// included) do not count. At most `max_listed` pairs, by ascending i, then j. Parallel over
-/// blocks of triangles; the same pairs for any thread count.
+/// included) do not count; the two faces of an edge do where one folds back onto the other
+/// (their third corners on one side of the edge, in one plane). At most `max_listed` pairs, by
+/// ascending i, then j. Parallel over blocks of triangles; the same pairs for any thread count.
 std::vector<std::array<std::uint32_t, 2>> surface_self_intersections(const SurfaceMesh& surface,
                                                                      std::size_t max_listed);
 
 /// A point where surface triangles f and g cross (as surface_self_intersections() lists them):
 /// where an edge of one passes through the other, else (coplanar overlap) a corner of one inside
-/// the other, else the midpoint of their centroids.
+/// the other (not one they share), else the midpoint of their centroids.
 Vec3d triangles_crossing_point(const SurfaceMesh& surface, std::uint32_t f, std::uint32_t g);
 
 /// One line per failed check ("3 inverted tets (first: 12, 40, 41)"); "" when valid.

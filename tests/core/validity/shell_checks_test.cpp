@@ -99,6 +99,25 @@ TEST(ShellChecks, SelfIntersectionsOfTheSurface) {
   EXPECT_TRUE(surface_self_intersections(two, 10).empty());
 }
 
+TEST(ShellChecks, AFaceFoldedOntoItsNeighbourCrossesIt) {
+  // Two faces of the edge (0, 0, 0)-(1, 0, 0), oriented alike; the second's third corner on the
+  // first's side of the edge, in its plane: a sliver turned over (as rounding leaves CAD
+  // exports), whose interior lies on its neighbour's. Across the edge (flat) or 0.6 degrees out
+  // of the plane (a razor-thin wedge) they only touch.
+  const auto two_faces = [](const Vec3d& q) {
+    SurfaceMesh m;
+    m.points = {{0, 0, 0}, {1, 0, 0}, {0.5, 1, 0}, q};
+    m.triangles = {{0, 1, 2}, {1, 0, 3}};
+    return m;
+  };
+  const SurfaceMesh folded = two_faces({0.3, 1e-4, 0});
+  EXPECT_EQ(surface_self_intersections(folded, 10).size(), 1u);
+  // Named at the folded corner, not at a shared one.
+  EXPECT_EQ(distance(triangles_crossing_point(folded, 0, 1), folded.points[3]), 0.0);
+  EXPECT_TRUE(surface_self_intersections(two_faces({0.3, -0.5, 0}), 10).empty());
+  EXPECT_TRUE(surface_self_intersections(two_faces({0.3, 0.5, 0.005}), 10).empty());
+}
+
 TEST(ShellChecks, ValidShellsReportNothing) {
   for (const auto& [name, detail] :
        {std::pair<const char*, int>{"box", 2}, {"sphere", 2}, {"cylinder", 1}, {"torus", 1}}) {
