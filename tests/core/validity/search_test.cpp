@@ -203,35 +203,49 @@ TEST(Validity, EveryTetReachesTheMinimumQualityWhereNoCornerIsAtItsFloor) {
   }
 }
 
-/// Shells `mesh` (`plain` with vertices inserted) at 48^3 without the optimisation (it moves
-/// inner vertices off their leaders' segments): checked independently, `followers` following,
-/// nearly as thick as the shell of `plain` (none following). `inner` gets each vertex's inner
-/// point, read off the inner surface (faces reversed: corners 0, 2, 1). False if a run threw.
-bool shell_with_followers(const SurfaceMesh& plain, const SurfaceMesh& mesh, const char* name,
-                          std::size_t followers, std::vector<Vec3d>& inner) {
+/// For the sphere, box and torus (detail 2), each as it is and with vertices `insert`ed
+/// (`insert(plain, inserted)` returns the mesh, appending the new vertices): shelled at 48^3
+/// without the optimisation (it moves inner vertices off their leaders' segments), checked
+/// independently, every inserted vertex following (none in the plain shape), nearly as thick as
+/// the plain shape's shell, each inserted vertex's inner point off its surface point and where
+/// `expected(mesh, inner, m)` puts it (`inner`: each vertex's inner point, read off the inner
+/// surface, faces reversed: corners 0, 2, 1).
+template <class Insert, class Expected>
+void expect_followers(const Insert& insert, const Expected& expected) {
   ShellOptions options;
   options.fields.resolution = 48;
   options.optimize.enabled = false;
-  ShellResult r, plain_r;
-  try {
-    r = build_shell(mesh, options, {}, name);
-    plain_r = build_shell(plain, options, {}, name);
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << name << ": " << e.what();
-    return false;
+  for (const char* name : {"sphere", "box", "torus"}) {
+    SCOPED_TRACE(name);
+    std::vector<test::InsertedVertex> inserted;
+    const SurfaceMesh plain = make_shape(name, 2);
+    const SurfaceMesh mesh = insert(plain, inserted);
+    ASSERT_GE(inserted.size(), 20u);
+    ShellResult r, plain_r;
+    try {
+      r = build_shell(mesh, options, {}, name);
+      plain_r = build_shell(plain, options, {}, name);
+    } catch (const std::exception& e) {
+      ADD_FAILURE() << e.what();
+      continue;
+    }
+    EXPECT_EQ(test::independent_shell_problems(r.surface, r.mesh), "");
+    EXPECT_EQ(r.validity.following_vertices, inserted.size());
+    EXPECT_EQ(plain_r.validity.following_vertices, 0u);
+    EXPECT_GT(test::independent_coverage(r.surface, r.mesh),
+              test::independent_coverage(plain, plain_r.mesh) - 0.1);
+    std::vector<Vec3d> inner(r.surface.points.size());
+    for (std::size_t f = 0; f < r.surface.triangles.size(); ++f)
+      for (int k = 0; k < 3; ++k)
+        inner[r.surface.triangles[f][k]] =
+            r.inner_surface.points[r.inner_surface.triangles[f][(3 - k) % 3]];
+    const double tolerance = 1e-9 * bounding_box(mesh).diagonal();
+    for (const test::InsertedVertex& m : inserted) {
+      EXPECT_LT(distance(inner[m.vertex], expected(mesh, inner, m)), tolerance)
+          << "vertex " << m.vertex << " next to " << m.near << " (far end " << m.far << ")";
+      EXPECT_GT(distance(inner[m.vertex], mesh.points[m.vertex]), 0.0) << "vertex " << m.vertex;
+    }
   }
-  EXPECT_EQ(test::independent_shell_problems(r.surface, r.mesh), "") << name;
-  EXPECT_EQ(r.validity.following_vertices, followers) << name;
-  EXPECT_EQ(plain_r.validity.following_vertices, 0u) << name;
-  EXPECT_GT(test::independent_coverage(r.surface, r.mesh),
-            test::independent_coverage(plain, plain_r.mesh) - 0.1)
-      << name;
-  inner.assign(r.surface.points.size(), Vec3d{});
-  for (std::size_t f = 0; f < r.surface.triangles.size(); ++f)
-    for (int k = 0; k < 3; ++k)
-      inner[r.surface.triangles[f][k]] =
-          r.inner_surface.points[r.inner_surface.triangles[f][(3 - k) % 3]];
-  return true;
 }
 
 TEST(Validity, VerticesNextToAnEdgesEndFollowTheEdgesEnds) {
@@ -240,21 +254,13 @@ TEST(Validity, VerticesNextToAnEdgesEndFollowTheEdgesEnds) {
   // and the edge's floors fall below the zero-volume tolerance (exit 3 on such shapes). Now its
   // inner vertex lies on the segment between the edge ends' inner vertices, where it lies on
   // the edge, and the shell is nearly as thick as without the insertions.
-  for (const char* name : {"sphere", "box", "torus"}) {
-    std::vector<test::InsertedVertex> inserted;
-    const SurfaceMesh plain = make_shape(name, 2);
-    const SurfaceMesh mesh = test::with_vertices_near_edge_ends(plain, 7, 1e-5, inserted);
-    ASSERT_GE(inserted.size(), 20u) << name;
-    std::vector<Vec3d> inner;
-    ASSERT_TRUE(shell_with_followers(plain, mesh, name, inserted.size(), inner));
-    const double tolerance = 1e-9 * bounding_box(mesh).diagonal();
-    for (const test::InsertedVertex& m : inserted) {
-      const Vec3d &a = inner[m.near], &b = inner[m.far];
-      EXPECT_LT(distance(inner[m.vertex], a + (b - a) * m.t), tolerance)
-          << name << ": vertex " << m.vertex << " on edge " << m.near << "-" << m.far;
-      EXPECT_GT(distance(inner[m.vertex], mesh.points[m.vertex]), 0.0) << name;
-    }
-  }
+  expect_followers(
+      [](const SurfaceMesh& plain, std::vector<test::InsertedVertex>& inserted) {
+        return test::with_vertices_near_edge_ends(plain, 7, 1e-5, inserted);
+      },
+      [](const SurfaceMesh&, const std::vector<Vec3d>& inner, const test::InsertedVertex& m) {
+        return inner[m.near] + (inner[m.far] - inner[m.near]) * m.t;
+      });
 }
 
 TEST(Validity, VerticesNearlyOneFollowInAnyDirection) {
@@ -263,20 +269,13 @@ TEST(Validity, VerticesNearlyOneFollowInAnyDirection) {
   // trace of its own crossed the corner's over so short an edge, and its floor put the tets
   // there below the zero-volume tolerance (exit 3 on every such shape). Its inner point is now
   // the corner's moved by the same offset.
-  for (const char* name : {"sphere", "box", "torus"}) {
-    std::vector<test::InsertedVertex> inserted;
-    const SurfaceMesh plain = make_shape(name, 2);
-    const SurfaceMesh mesh = test::with_vertices_near_corners(plain, 3, 1e-5, inserted);
-    ASSERT_GE(inserted.size(), 20u) << name;
-    std::vector<Vec3d> inner;
-    ASSERT_TRUE(shell_with_followers(plain, mesh, name, inserted.size(), inner));
-    const double tolerance = 1e-9 * bounding_box(mesh).diagonal();
-    for (const test::InsertedVertex& m : inserted)
-      EXPECT_LT(
-          distance(inner[m.vertex], inner[m.near] + (mesh.points[m.vertex] - mesh.points[m.near])),
-          tolerance)
-          << name << ": vertex " << m.vertex << " next to " << m.near;
-  }
+  expect_followers(
+      [](const SurfaceMesh& plain, std::vector<test::InsertedVertex>& inserted) {
+        return test::with_vertices_near_corners(plain, 3, 1e-5, inserted);
+      },
+      [](const SurfaceMesh& mesh, const std::vector<Vec3d>& inner, const test::InsertedVertex& m) {
+        return inner[m.near] + (mesh.points[m.vertex] - mesh.points[m.near]);
+      });
 }
 
 TEST(Validity, CapsApexesFollowTheirBases) {
@@ -288,23 +287,17 @@ TEST(Validity, CapsApexesFollowTheirBases) {
   // the way its twist bends towards the cap.
   // Strips of 3 caps (a fan of slivers along one edge) follow the edge's ends alike.
   for (const std::size_t strip : {1, 3})
-    for (const char* name : {"sphere", "box", "torus"}) {
-      std::vector<test::InsertedVertex> inserted;
-      const SurfaceMesh plain = make_shape(name, 2);
-      const SurfaceMesh mesh = test::with_caps(plain, 7, 1e-6, strip, inserted);
-      ASSERT_GE(inserted.size(), 20u) << name;
-      std::vector<Vec3d> inner;
-      ASSERT_TRUE(shell_with_followers(plain, mesh, name, inserted.size(), inner));
-      const double tolerance = 1e-9 * bounding_box(mesh).diagonal();
-      for (const test::InsertedVertex& m : inserted) {
-        const Vec3d &a = mesh.points[m.near], &b = mesh.points[m.far];
-        const Vec3d offset = mesh.points[m.vertex] - (a + (b - a) * m.t);
-        const Vec3d &ia = inner[m.near], &ib = inner[m.far];  // one point: a weld, shared
-        EXPECT_LT(distance(inner[m.vertex], ia == ib ? ia : ia + (ib - ia) * m.t + offset),
-                  tolerance)
-            << name << ": vertex " << m.vertex << " on edge " << m.near << "-" << m.far;
-      }
-    }
+    expect_followers(
+        [&](const SurfaceMesh& plain, std::vector<test::InsertedVertex>& inserted) {
+          return test::with_caps(plain, 7, 1e-6, strip, inserted);
+        },
+        [](const SurfaceMesh& mesh, const std::vector<Vec3d>& inner,
+           const test::InsertedVertex& m) {
+          const Vec3d &a = mesh.points[m.near], &b = mesh.points[m.far];
+          const Vec3d offset = mesh.points[m.vertex] - (a + (b - a) * m.t);
+          const Vec3d &ia = inner[m.near], &ib = inner[m.far];  // one point: a weld, shared
+          return ia == ib ? ia : ia + (ib - ia) * m.t + offset;
+        });
 }
 
 /// A block 50 long in y over the polygon `end` triangulates (corners `profile`, in x-z, its
