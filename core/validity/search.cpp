@@ -333,7 +333,7 @@ std::vector<Leaders> find_followers(const SurfaceMesh& surface, const IndexLists
       if (best.a == UINT32_MAX) {
         // On no such segment (vertices nearly one, in general position): m's inner point is
         // a's moved by m - a, where a's way in goes in at m. Traces of their own would cross
-        // over so short an edge, and its floors put the tets there below the zero-volume
+        // over so short an edge, and their floors put the tets there below the zero-volume
         // tolerance.
         const double l2 = norm2(surface.points[m] - pa);
         if (!(l2 <= kNearlyOne * kNearlyOne * std::min(longest[a], longest[m])) || !inward(m, a, a))
@@ -708,7 +708,8 @@ class ShellSearch {
 
   /// v's inner vertex in `s`: its id in LocalPrism's numbering (below n: on the surface) and its
   /// position. A follower's is on its leaders' (on the surface when both of theirs are, theirs
-  /// when they share one: then returns the leader a, else UINT32_MAX).
+  /// when two share one: then returns the leader a, else UINT32_MAX), or its one leader's moved
+  /// by its offset.
   std::uint32_t inner_vertex(const State& s, std::uint32_t v, std::uint32_t& id, Vec3d& at) const {
     const auto n = static_cast<std::uint32_t>(full_.size());
     if (follows(v)) {
