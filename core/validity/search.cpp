@@ -414,13 +414,14 @@ class ShellSearch {
     // 0.2 floor; the lowest points of channels over a 0.2 floor, apexes of a fan of such slivers
     // from the part's corner, followed the corner up where its floor was the deeper).
     const auto inward = [&](std::uint32_t m, std::uint32_t a, std::uint32_t b) {
-      for (const std::uint32_t e : {a, b}) {
+      const auto goes_in = [&](std::uint32_t e) {
         const Vec3d d = fallback_[e] + correction_[e];
         for (const std::uint32_t f : faces_[m])
           if (!along_base(surface, f, a, b) && !(dot(face_normal_area(surface, f), d) < 0))
             return false;
-      }
-      return true;
+        return true;
+      };
+      return goes_in(a) && (b == a || goes_in(b));  // a cluster's lone leader: once
     };
     leaders_ = find_followers(surface, faces_, start, inward);
     for (std::uint32_t v = 0; v < n; ++v)  // followers are placed by their leaders

@@ -188,8 +188,7 @@ bool surface_triangles_cross(const SurfaceMesh& surface, std::uint32_t f, std::u
   const Vec3d &u = a[(k + 1) % 3], along = normalized(a[(k + 2) % 3] - u);
   const auto off_edge = [&](const Vec3d& x) { return (x - u) - along * dot(x - u, along); };
   const Vec3d p = off_edge(a[k]), q = off_edge(b[j]);
-  const double np = norm(p), nq = norm(q);
-  return dot(p, q) > 0 && norm(cross(p, q)) <= tol * std::max(np, nq);
+  return dot(p, q) > 0 && norm(cross(p, q)) <= tol * std::max(norm(p), norm(q));
 }
 
 std::string format_list(const std::vector<std::uint32_t>& list) {
