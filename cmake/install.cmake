@@ -29,7 +29,7 @@ install(TARGETS vdb_shell_program vdb_shell_vdb_reader
 install(FILES include/vdb_shell/vdb_shell.h DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/vdb_shell)
 foreach(header
     base/errors.h base/run_control.h base/surface_mesh.h base/tet_mesh.h base/vec3.h
-    read/load_surface.h read/polygon_soup.h trace/field_sampler.h
+    read/load_surface.h read/polygon_soup.h read/zero_area.h trace/field_sampler.h
     trace/trace.h inner/inner.h validity/optimize.h validity/search.h validity/shell_checks.h
     assemble/assemble.h assemble/quality.h)
   get_filename_component(folder ${header} DIRECTORY)

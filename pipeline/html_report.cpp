@@ -500,6 +500,9 @@ std::string report_html(const ShellResult& r, const ReportFiles& files, double r
     h << row("folded vertices", count_of(v.folded_vertices) + " (" + count_of(v.sectors) +
                                     " sectors, " + count_of(v.gap_tets) + " gap tets)");
     h << row("kept on the surface", count_of(v.on_surface_vertices));
+    if (v.flat_tets > 0)
+      h << row("zero-area faces",
+               count_of(v.flat_tets) + " flat tets keep them on the outer boundary (zero volume)");
     if (r.optimize.report.ran) {
       const OptimizeSummary& o = r.optimize;
       h << row("optimised (--optimize)",

@@ -218,7 +218,11 @@ void scale_result(ShellResult& r, int k) {
 ShellResult run(const LoadedSurface& surface, const ShellOptions& options,
                 const RunControl& control) {
   const auto t_total = Clock::now();
-  const SurfaceMesh& mesh = surface.mesh;
+  // The shell is built on the input with its zero-area faces flipped away (if any), and joined
+  // to the input itself at the end.
+  const SurfaceMesh flipped =
+      surface.zero_area.empty() ? SurfaceMesh{} : flipped_surface(surface.mesh, surface.zero_area);
+  const SurfaceMesh& mesh = surface.zero_area.empty() ? surface.mesh : flipped;
   ShellResult r;
   MemoryEstimates& memory = r.memory;
   const std::size_t budget = memory.budget = budget_bytes(options.fields.max_memory_gb);
@@ -231,7 +235,7 @@ ShellResult run(const LoadedSurface& surface, const ShellOptions& options,
                       "give a surface with fewer faces or raise --max-memory");
   r.options = options;
   r.input = {surface.source, surface.stats, surface.flipped, surface.flipped_components};
-  r.surface = mesh;
+  r.surface = surface.mesh;
   r.notices = surface.notices;
 
   std::shared_ptr<const Fields> fields;
@@ -346,7 +350,12 @@ ShellResult run(const LoadedSurface& surface, const ShellOptions& options,
       const SectorShell sectors = join_sectors(mesh, split, valid, options.validity.min_quality);
       r.validity.gap_tets = sectors.gap_tets;
     }
-    r.quality = summarize_quality(mesh, valid.shell.mesh);
+    if (valid.checks.valid() && !surface.zero_area.empty())
+      join_zero_area_faces(surface.mesh, surface.zero_area, r.validity.gap_tets, valid);
+    r.validity.flat_tets = surface.zero_area.tets.size();
+    QualityOptions flat;
+    flat.flat_tets = r.validity.flat_tets;
+    r.quality = summarize_quality(surface.mesh, valid.shell.mesh, flat);
     r.timings.validity = seconds_since(t0);
     if (!valid.checks.valid()) throw_invalid(surface, split, valid);
     monitor.finish();
@@ -512,11 +521,7 @@ ShellResult build_shell(const LoadedSurface& surface, const ShellOptions& option
 
 ShellResult build_shell(const SurfaceMesh& mesh, const ShellOptions& options,
                         const RunControl& control, const std::string& source) {
-  PolygonSoup soup;
-  soup.points = mesh.points;
-  soup.polygons.reserve(mesh.triangles.size());
-  for (const Triangle& t : mesh.triangles) soup.polygons.push_back({t[0], t[1], t[2]});
-  return build_shell(make_surface(soup, source), options, control);
+  return build_shell(make_surface(polygon_soup_of(mesh), source), options, control);
 }
 
 LoadedSurface load_level_set_surface(const std::string& vdb_path, const ShellOptions& options,
@@ -619,6 +624,7 @@ std::string report_json(const ShellResult& r, const ReportFiles& files, double r
                      {"folded_vertices", v.folded_vertices},
                      {"sectors", v.sectors},
                      {"gap_tets", v.gap_tets},
+                     {"flat_tets", v.flat_tets},
                      {"on_surface_vertices", v.on_surface_vertices},
                      {"following_vertices", v.following_vertices},
                      {"cap_faces", v.cap_faces},

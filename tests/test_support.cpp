@@ -193,7 +193,7 @@ double nearest_vertex_distance(const SurfaceMesh& s, const Vec3d& p) {
 }  // namespace
 
 std::string independent_shell_problems(const SurfaceMesh& surface, const TetMesh& shell,
-                                       std::size_t extra_tets) {
+                                       std::size_t extra_tets, std::size_t flat_tets) {
   auto same_cycle = [](const std::array<std::uint32_t, 3>& a, const Triangle& b) {
     for (int r = 0; r < 3; ++r)
       if (a[r] == b[0] && a[(r + 1) % 3] == b[1] && a[(r + 2) % 3] == b[2]) return true;
@@ -219,7 +219,14 @@ std::string independent_shell_problems(const SurfaceMesh& surface, const TetMesh
       if (i >= shell.points.size()) return "tet " + std::to_string(t) + ": index out of range";
     const double v6 = signed_volume6(shell.points[k[0]], shell.points[k[1]], shell.points[k[2]],
                                      shell.points[k[3]]);
-    if (!(v6 > 0)) {
+    if (t + flat_tets >= shell.tets.size()) {  // a flat tet: four surface points, no volume
+      const double diag = bounding_box(surface).diagonal();
+      if (std::any_of(k.begin(), k.end(), [&](std::uint32_t i) { return i >= n; }) ||
+          !(std::abs(v6) <= 6e-12 * diag * diag * diag)) {
+        problem << "flat tet " << t << " has an inner corner or signed volume " << v6 / 6;
+        return problem.str();
+      }
+    } else if (!(v6 > 0)) {
       problem << "tet " << t << " has signed volume " << v6 / 6;
       return problem.str();
     }
@@ -250,7 +257,9 @@ std::string independent_shell_problems(const SurfaceMesh& surface, const TetMesh
       return problem.str();
     }
   }
-  const auto [t, u] = first_overlap(shell);
+  TetMesh solid = shell;  // the tets with a volume
+  solid.tets.resize(shell.tets.size() - std::min(flat_tets, shell.tets.size()));
+  const auto [t, u] = first_overlap(solid);
   if (t >= 0) {
     problem << "tets " << t << " and " << u << " overlap";
     return problem.str();

@@ -71,9 +71,11 @@ void write_text(const std::string& path, const std::string& text);
 /// two tets, and two tets sharing a face lie on opposite sides of it; no two tets overlap (the
 /// centroid of each tet and the midpoints between it and the corners lie strictly inside no
 /// other tet); every other point lies inside the surface (winding number > 1/2) or on it.
+/// The last `flat_tets` tets may be flat (zero-area input faces): four surface points each, of
+/// volume within 1e-12 diagonal^3 (check_shell.py's "degenerate"), left out of the overlap test.
 /// Returns "" or the first problem found.
 std::string independent_shell_problems(const SurfaceMesh& surface, const TetMesh& shell,
-                                       std::size_t extra_tets = 0);
+                                       std::size_t extra_tets = 0, std::size_t flat_tets = 0);
 
 /// Shell volume / enclosed volume, both computed here: the sum of the tets' signed volumes over
 /// the volume the surface's triangles enclose (divergence theorem). 0 for an empty surface.

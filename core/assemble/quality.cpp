@@ -78,17 +78,19 @@ std::vector<double> tet_qualities(const TetMesh& mesh) {
 QualitySummary summarize_quality(const SurfaceMesh& surface, const TetMesh& mesh,
                                  const QualityOptions& options) {
   QualitySummary s;
-  s.tets = mesh.tets.size();
+  const std::size_t n = mesh.tets.size() - std::min(options.flat_tets, mesh.tets.size());
+  s.tets = n;
   const std::size_t bins = std::max<std::size_t>(options.histogram_bins, 1);
   s.histogram.assign(bins, 0);
   s.enclosed_volume = signed_volume(surface);
 
   std::vector<double> q =
       mesh.quality.size() == mesh.tets.size() ? mesh.quality : tet_qualities(mesh);
+  q.resize(std::min(q.size(), n));
   // Per tet in parallel; the volume summed in tet order after (the same sum for any thread
   // count).
-  std::vector<double> volumes(mesh.tets.size()), dihedrals(mesh.tets.size());
-  for_each_index(mesh.tets.size(), [&](std::size_t t) {
+  std::vector<double> volumes(n), dihedrals(n);
+  for_each_index(n, [&](std::size_t t) {
     const Tet& v = mesh.tets[t];
     const Vec3d &a = mesh.points[v[0]], &b = mesh.points[v[1]], &c = mesh.points[v[2]],
                 &d = mesh.points[v[3]];

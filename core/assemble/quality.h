@@ -39,6 +39,9 @@ std::vector<double> tet_qualities(const TetMesh& mesh);
 struct QualityOptions {
   /// Number of equal-width histogram bins over (0, 1]; tets with Q <= 0 are counted apart.
   std::size_t histogram_bins = 10;
+  /// The last this many tets are left out (the flat tets of zero-area input faces,
+  /// core/read/zero_area.h): every figure is over the others.
+  std::size_t flat_tets = 0;
 };
 
 /// The quality report of a shell.

@@ -187,16 +187,26 @@ std::vector<std::int64_t> position_indices(const std::vector<Vec3d>& points,
   return index;
 }
 
+double points_diagonal(const std::vector<Vec3d>& points) {
+  BBox box;
+  for (const Vec3d& p : points) box.expand(p);
+  return box.diagonal();
+}
+
+/// Twice the area at or below which a face of a surface on `points` has zero area.
+double zero_twice_area(const std::vector<Vec3d>& points, const ValidationOptions& options) {
+  const double diag = points_diagonal(points);
+  return 2.0 * options.degenerate_area_fraction * diag * diag;
+}
+
 /// Faces of zero area (a repeated corner, or below the area threshold), which it marks, and
 /// faces with an edge below the short-edge threshold.
 void check_degenerate(const SoupFaces& f, const ValidationOptions& options,
                       ProblemCollector& degenerate, ProblemCollector& short_edge,
                       std::vector<char>& is_degenerate) {
   const auto& pts = f.points();
-  BBox box;
-  for (const Vec3d& p : pts) box.expand(p);
-  const double diag = box.diagonal();
-  const double min_twice_area = 2.0 * options.degenerate_area_fraction * diag * diag;
+  const double diag = points_diagonal(pts);
+  const double min_twice_area = zero_twice_area(pts, options);
   const double min_edge = options.short_edge_fraction * diag;
   is_degenerate.assign(f.tris.size(), 0);
   for (std::size_t t = 0; t < f.tris.size(); ++t) {
@@ -345,6 +355,7 @@ PolygonSoup weld_positions(const PolygonSoup& soup, std::size_t& welded) {
 /// The rules that make_surface() mends (after welding) when they are all that is left:
 /// inconsistent orientation (orient_faces_alike()) and pinched vertices (split_pinched_vertices()).
 constexpr const char* kOrientationRule = "inconsistently oriented faces";
+constexpr const char* kZeroAreaRule = "degenerate (zero-area) faces";
 constexpr const char* kPinchedVertexRule = "non-manifold vertices (faces meeting only at a vertex)";
 
 /// One side of a polygon: its ends (lo < hi), the polygon's corners there (indices into all
@@ -577,8 +588,7 @@ std::vector<SurfaceProblem> find_surface_problems(const PolygonSoup& soup,
   if (!check_elements(soup, max, problems)) return problems;
 
   const SoupFaces faces{soup, fan_triangulate(soup)};
-  ProblemCollector degenerate("degenerate (zero-area) faces",
-                              "remove or collapse the zero-area faces", max);
+  ProblemCollector degenerate(kZeroAreaRule, "remove or collapse the zero-area faces", max);
   char fraction[32];  // 1e-9, not printf's 1e-09
   std::snprintf(fraction, sizeof fraction, "%g", options.short_edge_fraction);
   std::string under = fraction;
@@ -631,6 +641,14 @@ std::vector<SurfaceProblem> find_surface_problems(const PolygonSoup& soup,
   return problems;
 }
 
+PolygonSoup polygon_soup_of(const SurfaceMesh& mesh) {
+  PolygonSoup soup;
+  soup.points = mesh.points;
+  soup.polygons.reserve(mesh.triangles.size());
+  for (const Triangle& t : mesh.triangles) soup.polygons.push_back({t[0], t[1], t[2]});
+  return soup;
+}
+
 SurfaceStats surface_stats(const SurfaceMesh& mesh) {
   SurfaceStats s;
   s.vertices = mesh.points.size();
@@ -679,9 +697,12 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
   // one position along UV or normal seams, made one. Then, if nothing else is left, faces
   // running against their neighbours, turned to agree with them; and pinches: parts of the
   // surface meeting only at a vertex, that vertex split, one per fan.
+  // Zero-area faces, when nothing else is left, are flipped away (zero_area.h) once the surface
+  // is oriented, kept only if that makes a valid surface.
   std::size_t seam_vertices = 0, reoriented_faces = 0, pinched_vertices = 0;
   PolygonSoup welded, oriented, split;
   const PolygonSoup* mended = &input;
+  bool flip = false;
   if (!problems.empty()) {
     std::vector<SurfaceProblem> left = problems;
     const auto take = [&](PolygonSoup& soup, std::size_t count) {
@@ -706,9 +727,13 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
       split = split_pinched_vertices(*mended, pinched_vertices);
       take(split, pinched_vertices);
     }
+    flip = !left.empty() && std::all_of(left.begin(), left.end(), [](const SurfaceProblem& p) {
+      return p.rule == kZeroAreaRule;
+    });
     if (left.empty()) problems.clear();
+    if (flip) problems = std::move(left);  // what to say if the flips do not make it valid
   }
-  if (!problems.empty()) {
+  const auto refuse = [&] {
     std::string msg = source + ": not a closed 2-manifold triangle surface: ";
     for (std::size_t i = 0; i < problems.size(); ++i) {
       const SurfaceProblem& p = problems[i];
@@ -716,7 +741,8 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
              " — fix: " + p.remedy;
     }
     throw InputError(msg);
-  }
+  };
+  if (!problems.empty() && !flip) refuse();
 
   const PolygonSoup& soup = *mended;
   LoadedSurface out;
@@ -759,6 +785,19 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
         " components faced into the solid (a body's faces must point out of it, a cavity's into "
         "it) and were flipped, the first being the component of " +
         (tri_only ? "face " : "polygon ") + std::to_string(tris[turned[0]].polygon));
+  }
+  if (flip) {
+    std::optional<ZeroAreaFlips> flips =
+        flip_zero_area_faces(out.mesh, zero_twice_area(out.mesh.points, options));
+    if (!flips) refuse();
+    if (!find_surface_problems(polygon_soup_of(flipped_surface(out.mesh, *flips)), options).empty())
+      refuse();
+    out.zero_area = std::move(*flips);
+    out.notices.push_back(
+        std::to_string(problems[0].count) +
+        " faces have zero area (three corners on one line): the shell is built with the edge "
+        "facing each one's widest angle flipped, and each is kept on its outer boundary by a flat "
+        "tet (zero volume) glued on there");
   }
   const auto note = [&](std::size_t count, const char* what) {
     if (count) out.notices.push_back(std::to_string(count) + what);

@@ -21,6 +21,7 @@
 
 #include "core/base/surface_mesh.h"
 #include "core/read/polygon_soup.h"
+#include "core/read/zero_area.h"
 
 namespace vdb_shell {
 
@@ -67,6 +68,10 @@ struct LoadedSurface {
   /// of faces, the copies after all other vertices (make_surface() splits them only when that,
   /// after any welding, makes a valid surface of an invalid one).
   std::size_t pinched_vertices = 0;
+  /// Zero-area faces (three corners on one line), flipped away for the shell and kept on its
+  /// boundary by flat tets (core/read/zero_area.h; make_surface() flips them only when that
+  /// makes a valid surface of one whose only fault they are).
+  ZeroAreaFlips zero_area;
   bool flipped = false;  ///< true when the input was oriented inward
   /// Components flipped alone (some of several faced into the solid; `flipped` when all did).
   std::size_t flipped_components = 0;
@@ -93,6 +98,9 @@ LoadedSurface make_surface(const PolygonSoup& soup, const std::string& source,
 
 /// read_polygon_soup() followed by make_surface().
 LoadedSurface load_surface(const std::string& path, const ValidationOptions& options = {});
+
+/// The triangles of `mesh` as a soup's polygons (to validate or load a surface built in code).
+PolygonSoup polygon_soup_of(const SurfaceMesh& mesh);
 
 /// Counts, genus, bounds and volume of a triangle surface (closed meshes give exact genus).
 SurfaceStats surface_stats(const SurfaceMesh& mesh);

@@ -79,7 +79,7 @@ void count_volumes(const TetMesh& mesh, const ShellCheckOptions& options,
                    ShellCheckResult& result) {
   std::vector<TetVolume> sign(mesh.tets.size(), TetVolume::kPositive);
   for_each_chunk(
-      mesh.tets.size(),
+      mesh.tets.size() - std::min(options.flat_tets, mesh.tets.size()),
       [&](std::size_t begin, std::size_t end) {
         for (std::size_t t = begin; t != end; ++t)
           sign[t] = tet_volume_class(tet_corners(mesh, t), options.zero_volume_tolerance);

@@ -182,4 +182,22 @@ SectorShell join_sectors(const SurfaceMesh& surface, const SectorSplit& split, V
   return out;
 }
 
+void join_zero_area_faces(const SurfaceMesh& surface, const ZeroAreaFlips& flips,
+                          std::size_t gap_tets, ValidShell& valid) {
+  TetMesh& mesh = valid.shell.mesh;
+  for (std::uint32_t& f : mesh.source_triangle) f = flips.face_of[f];
+  mesh.tets.insert(mesh.tets.end(), flips.tets.begin(), flips.tets.end());
+  mesh.source_triangle.insert(mesh.source_triangle.end(), flips.tet_face.begin(),
+                              flips.tet_face.end());
+  if (!mesh.layer.empty()) mesh.layer.resize(mesh.tets.size(), 1);
+  mesh.quality = tet_qualities(mesh);
+  ShellCheckOptions options;
+  options.layers = valid.assemble.layers;
+  options.extra_tets = gap_tets + flips.tets.size();
+  options.flat_tets = flips.tets.size();
+  const double seconds = valid.checks.seconds;
+  valid.checks = check_shell(surface, mesh, options);
+  valid.checks.seconds += seconds;
+}
+
 }  // namespace vdb_shell

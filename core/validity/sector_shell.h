@@ -19,11 +19,16 @@
 // At most 2 tets per sector boundary: T <= 3F + 2 * sectors. A layered shell (--layers K > 1)
 // cuts the side quads at layer points the gap tets would not share, so its gaps stay open:
 // T <= 3 K F.
+//
+// join_zero_area_faces() does the same for the shell of a surface whose zero-area faces were
+// flipped away (core/read/zero_area.h): each flip's flat tet glued on, the tets' source
+// triangles those of the input faces whose ground they cover.
 #pragma once
 
 #include <cstddef>
 
 #include "core/inner/sectors.h"
+#include "core/read/zero_area.h"
 #include "core/validity/search.h"
 
 namespace vdb_shell {
@@ -40,5 +45,12 @@ struct SectorShell {
 /// leave such slivers where it can move a corner either).
 SectorShell join_sectors(const SurfaceMesh& surface, const SectorSplit& split, ValidShell& valid,
                          double min_quality);
+
+/// Turns `valid`, the valid shell of `surface` with `flips` made (of its sectors joined, with
+/// `gap_tets` tets filling their gaps), into a shell of `surface`: the flat tets appended (the
+/// last flips.tets.size() tets, layer 1), the source triangles mapped to the input's, checked in
+/// full on `surface` (valid.checks; ShellCheckOptions::flat_tets).
+void join_zero_area_faces(const SurfaceMesh& surface, const ZeroAreaFlips& flips,
+                          std::size_t gap_tets, ValidShell& valid);
 
 }  // namespace vdb_shell

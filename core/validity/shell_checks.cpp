@@ -138,11 +138,13 @@ ShellCheckResult check_tets(const SurfaceMesh& surface, const TetMesh& mesh,
   const InsideTester inside(surface, on_surface_distance(surface, options));
   check_inner_points(mesh, inner_points, inside, options, result);
   if (options.check_overlaps || options.check_leaks) {
+    const std::size_t shell_tets = mesh.tets.size() - std::min(options.flat_tets, mesh.tets.size());
     std::vector<std::uint32_t> queries;
-    for (std::size_t t = 0; t < mesh.tets.size(); ++t)
+    for (std::size_t t = 0; t < shell_tets; ++t)
       if (!added || (*added)[t]) queries.push_back(static_cast<std::uint32_t>(t));
-    check_intersections(surface, mesh, added ? tets_near_added(mesh, *added) : queries, queries,
-                        inside, options, result);
+    std::vector<std::uint32_t> near = added ? tets_near_added(mesh, *added) : queries;
+    near.erase(std::lower_bound(near.begin(), near.end(), shell_tets), near.end());
+    check_intersections(surface, mesh, near, queries, inside, options, result);
   }
   result.seconds = seconds_since(start);
   return result;

@@ -61,6 +61,10 @@ struct ShellCheckOptions {
   /// Tets allowed beyond 3 * layers per surface triangle (the gaps between sectors of folded
   /// vertices, sector_shell.h).
   std::size_t extra_tets = 0;
+  /// The last this many tets are the flat tets of zero-area input faces (core/read/zero_area.h):
+  /// four surface points each, of zero volume by construction. Their faces count as every tet's;
+  /// the volume, overlap and leak tests leave them out.
+  std::size_t flat_tets = 0;
   /// How many offending elements each list in the result keeps (lowest indices first);
   /// std::numeric_limits<std::size_t>::max() lists all of them.
   std::size_t max_listed = 5;

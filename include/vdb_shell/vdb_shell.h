@@ -98,9 +98,12 @@ struct ValidityReport {
   std::size_t moved_back_vertices = 0;
   double moved_back_mean_fraction = 0;
   std::size_t unwelded_vertices = 0;
-  std::size_t folded_vertices = 0;      ///< vertices split into sectors (docs/validity.md)
-  std::size_t sectors = 0;              ///< sectors of the folded vertices
-  std::size_t gap_tets = 0;             ///< tets filling the gaps between sectors
+  std::size_t folded_vertices = 0;  ///< vertices split into sectors (docs/validity.md)
+  std::size_t sectors = 0;          ///< sectors of the folded vertices
+  std::size_t gap_tets = 0;         ///< tets filling the gaps between sectors
+  /// flat tets (zero volume) keeping the input's zero-area faces on the outer boundary, the
+  /// shell's last tets (LoadedSurface::zero_area)
+  std::size_t flat_tets = 0;
   std::size_t on_surface_vertices = 0;  ///< vertices kept on the surface (no split found)
   std::size_t following_vertices = 0;   ///< vertices next to an edge following its ends
   std::size_t cap_faces = 0;

@@ -50,13 +50,6 @@ const Expected kExpected[] = {
     {"horn", 0, 408}, {"pointy", 0, 96},   {"propeller", 0, 1200}, {"flap", 0, 0},
 };
 
-PolygonSoup to_soup(const SurfaceMesh& mesh) {
-  PolygonSoup soup;
-  soup.points = mesh.points;
-  for (const Triangle& t : mesh.triangles) soup.polygons.push_back({t[0], t[1], t[2]});
-  return soup;
-}
-
 std::string describe(const std::vector<SurfaceProblem>& problems) {
   std::string out;
   for (const SurfaceProblem& p : problems) {
@@ -132,7 +125,7 @@ TEST(ShapesSelfCheck, IntersectionTestSeesCrossingsAndNotNeighbours) {
 TEST(ShapesSelfCheck, ValidatorSeesAFlippedTriangle) {
   SurfaceMesh mesh = make_shape("tube");
   std::swap(mesh.triangles[7][0], mesh.triangles[7][1]);
-  EXPECT_FALSE(find_surface_problems(to_soup(mesh)).empty());
+  EXPECT_FALSE(find_surface_problems(polygon_soup_of(mesh)).empty());
   EXPECT_GT(bad_directed_edges(mesh), 0u);
 }
 
@@ -146,7 +139,7 @@ TEST_P(ShapesEveryShape, IsAValidClosedSurfaceAtDetailOneAndTwo) {
     SCOPED_TRACE(std::string(e.name) + " detail " + std::to_string(detail));
     const SurfaceMesh mesh = make_shape(e.name, detail);
     ASSERT_GT(mesh.num_faces(), 0u);
-    const auto problems = find_surface_problems(to_soup(mesh));
+    const auto problems = find_surface_problems(polygon_soup_of(mesh));
     EXPECT_TRUE(problems.empty()) << describe(problems);
     EXPECT_EQ(bad_directed_edges(mesh), 0u);
     EXPECT_GT(signed_volume(mesh), 0.0);

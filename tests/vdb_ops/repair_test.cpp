@@ -23,13 +23,6 @@
 namespace vdb_shell {
 namespace {
 
-PolygonSoup soup_of(const SurfaceMesh& m) {
-  PolygonSoup s;
-  s.points = m.points;
-  for (const auto& t : m.triangles) s.polygons.push_back({t[0], t[1], t[2]});
-  return s;
-}
-
 /// Largest distance from the points of `from` to the triangles of `to`, by brute force.
 double max_distance(const std::vector<Vec3d>& from, const PolygonSoup& to) {
   double worst = 0;
@@ -76,7 +69,7 @@ Repaired repair(const PolygonSoup& soup, int resolution = 48, double closing = 2
 
 TEST(Repair, ACleanSurfaceIsKeptAsItIs) {
   const SurfaceMesh sphere = make_shape("sphere");
-  const Repaired r = repair(soup_of(sphere));
+  const Repaired r = repair(polygon_soup_of(sphere));
   EXPECT_TRUE(r.report.kept);
   EXPECT_EQ(r.surface.mesh.points, sphere.points);
   EXPECT_EQ(r.surface.mesh.triangles, sphere.triangles);
@@ -89,7 +82,7 @@ TEST(Repair, ACleanSphereRebuiltStaysWithinAVoxel) {
   // The volume path itself (repair_surface(), which load_repaired_surface() skips for a clean
   // input) on the clean sphere at 48 voxels across.
   const SurfaceMesh sphere = make_shape("sphere");
-  const PolygonSoup input = soup_of(sphere);
+  const PolygonSoup input = polygon_soup_of(sphere);
   RepairOptions options;
   options.voxel_size = bounding_box(sphere).max_side() / 48;
   RepairReport report;
@@ -101,7 +94,7 @@ TEST(Repair, ACleanSphereRebuiltStaysWithinAVoxel) {
   EXPECT_EQ(rebuilt.stats.genus, 0);
   EXPECT_EQ(report.holes_closed, 0u);
   const double out = max_distance(rebuilt.mesh.points, input);
-  const double back = max_distance(input.points, soup_of(rebuilt.mesh));
+  const double back = max_distance(input.points, polygon_soup_of(rebuilt.mesh));
   EXPECT_LT(out, 1.0 * h) << out / h << " voxels";
   EXPECT_LT(back, 1.0 * h) << back / h << " voxels";
   // The report's sampled distances agree with the brute force.
@@ -115,7 +108,7 @@ TEST(Repair, PunchedHolesAreCapped) {
   // Two faces of the sphere removed, far apart: two triangular holes, edges of about 4 voxels at
   // resolution 48, which a closing of 3 voxels caps.
   const SurfaceMesh sphere = make_shape("sphere");
-  PolygonSoup input = soup_of(sphere);
+  PolygonSoup input = polygon_soup_of(sphere);
   input.polygons.erase(input.polygons.begin() + 500);
   input.polygons.erase(input.polygons.begin() + 100);
   EXPECT_THROW(make_surface(input, "holes"), InputError);
@@ -124,8 +117,8 @@ TEST(Repair, PunchedHolesAreCapped) {
   EXPECT_EQ(r.surface.stats.components, 1u);
   EXPECT_EQ(r.surface.stats.genus, 0);
   EXPECT_LT(max_distance(r.surface.mesh.points, input), (3.0 + 1.0) * r.h);
-  EXPECT_LT(max_distance(input.points, soup_of(r.surface.mesh)), 1.0 * r.h);
-  const double volume = make_surface(soup_of(sphere), "sphere").stats.enclosed_volume;
+  EXPECT_LT(max_distance(input.points, polygon_soup_of(r.surface.mesh)), 1.0 * r.h);
+  const double volume = make_surface(polygon_soup_of(sphere), "sphere").stats.enclosed_volume;
   EXPECT_NEAR(r.surface.stats.enclosed_volume, volume, 0.03 * volume);
 }
 
@@ -133,7 +126,7 @@ TEST(Repair, ATinyInputIsRepairedAsItselfScaledExactly) {
   // The punched sphere at 2^-30 (~1e-9 across): its volume's voxels are below the smallest
   // OpenVDB accepts, so it is repaired at its own size and scaled back — the same surface, to the
   // bit, and the report's lengths scaled.
-  PolygonSoup input = soup_of(make_shape("sphere"));
+  PolygonSoup input = polygon_soup_of(make_shape("sphere"));
   input.polygons.erase(input.polygons.begin() + 500);
   const double s = std::ldexp(1.0, -30);
   PolygonSoup tiny = input;
@@ -148,7 +141,7 @@ TEST(Repair, ATinyInputIsRepairedAsItselfScaledExactly) {
   EXPECT_EQ(r.report.input_distance_max, big.report.input_distance_max * s);
   EXPECT_EQ(r.report.solid_input_distance_max, big.report.solid_input_distance_max * s);
   EXPECT_EQ(r.report.holes_closed, 1u);
-  EXPECT_LT(max_distance(tiny.points, soup_of(r.surface.mesh)), 1.0 * r.h);
+  EXPECT_LT(max_distance(tiny.points, polygon_soup_of(r.surface.mesh)), 1.0 * r.h);
 }
 
 TEST(Repair, SeamsStoredTwiceAndOverlappingPartsBecomeOneSolid) {
@@ -194,7 +187,7 @@ TEST(Repair, TheSolidFiguresLeaveOutAnOpenSheet) {
   // The report's solid figures cover the box's vertices only; all figures agree with the brute
   // force over each part's vertices.
   const SurfaceMesh box = make_shape("box", 2);
-  PolygonSoup input = soup_of(box);
+  PolygonSoup input = polygon_soup_of(box);
   const std::size_t box_points = input.points.size();
   const int n = 6;  // the sheet: n x n quads over [0.8, 1.6] x {0} x [-0.4, 0.4]
   for (int j = 0; j <= n; ++j)
@@ -206,7 +199,7 @@ TEST(Repair, TheSolidFiguresLeaveOutAnOpenSheet) {
       input.polygons.push_back({a, a + 1, a + n + 2, a + n + 1});
     }
   const Repaired r = repair(input, 48);
-  const PolygonSoup repaired = soup_of(r.surface.mesh);
+  const PolygonSoup repaired = polygon_soup_of(r.surface.mesh);
   const std::vector<Vec3d> box_part(input.points.begin(), input.points.begin() + box_points),
       sheet_part(input.points.begin() + box_points, input.points.end());
   const double on_box = max_distance(box_part, repaired),
@@ -232,7 +225,8 @@ TEST(Repair, NothingToRepairAndTooLargeAClosingAreBadInput) {
   none.points = {{0, 0, 0}};
   none.polygons = {{0, 5, 7}};
   EXPECT_THROW(repair(none), InputError);
-  PolygonSoup holed = soup_of(make_shape("sphere"));  // a clean one is kept, whatever the closing
+  PolygonSoup holed =
+      polygon_soup_of(make_shape("sphere"));  // a clean one is kept, whatever the closing
   holed.polygons.pop_back();
   try {
     repair(holed, 48, 20.0);
@@ -253,7 +247,7 @@ TEST(Repair, TwentyRandomDefectMixesGiveValidSurfaces) {
   const auto pick = [&](int n) { return std::uniform_int_distribution<int>(0, n - 1)(rng); };
   for (int mix = 0; mix < 20; ++mix) {
     const SurfaceMesh shape = make_shape(shapes[pick(5)]);
-    PolygonSoup soup = soup_of(shape);
+    PolygonSoup soup = polygon_soup_of(shape);
     std::vector<int> defects = {0, 1, 2, 3, 4, 5, 6};
     std::shuffle(defects.begin(), defects.end(), rng);
     defects.resize(std::size_t(2 + pick(3)));
