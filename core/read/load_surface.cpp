@@ -199,23 +199,23 @@ double zero_twice_area(const std::vector<Vec3d>& points, const ValidationOptions
   return 2.0 * options.degenerate_area_fraction * diag * diag;
 }
 
-/// Faces of zero area (a repeated corner, or below the area threshold), which it marks, and
-/// faces with an edge below the short-edge threshold.
+/// Faces of zero area (a repeated corner, or below the area threshold), and faces with an edge
+/// below the short-edge threshold; marks the faces with a repeated corner.
 void check_degenerate(const SoupFaces& f, const ValidationOptions& options,
                       ProblemCollector& degenerate, ProblemCollector& short_edge,
-                      std::vector<char>& is_degenerate) {
+                      std::vector<char>& repeated_corner) {
   const auto& pts = f.points();
   const double diag = points_diagonal(pts);
   const double min_twice_area = zero_twice_area(pts, options);
   const double min_edge = options.short_edge_fraction * diag;
-  is_degenerate.assign(f.tris.size(), 0);
+  repeated_corner.assign(f.tris.size(), 0);
   for (std::size_t t = 0; t < f.tris.size(); ++t) {
     const Triangle& v = f.tris[t].v;
     const bool repeated = v[0] == v[1] || v[1] == v[2] || v[0] == v[2];
     const double twice_area =
         repeated ? 0.0 : norm(cross(pts[v[1]] - pts[v[0]], pts[v[2]] - pts[v[0]]));
     if (repeated || twice_area <= min_twice_area) {
-      is_degenerate[t] = 1;
+      repeated_corner[t] = repeated;
       degenerate.add(f.face_name(f.tris[t]) + " (" + std::to_string(v[0]) + ", " +
                      std::to_string(v[1]) + ", " + std::to_string(v[2]) + ") at " +
                      fmt_point(f.soup.points[v[0]]));
@@ -292,15 +292,16 @@ void check_edges(const SoupFaces& f, ProblemCollector& boundary, ProblemCollecto
   }
 }
 
-/// A vertex is manifold when its corners (of non-degenerate faces) form one fan: one connected
-/// set through shared edges.
-void check_vertices(const SoupFaces& f, const std::vector<char>& is_degenerate,
+/// A vertex is manifold when its corners (of faces with three distinct corners: zero-area ones
+/// too, which the flips of make_surface() keep) form one fan: one connected set through shared
+/// edges.
+void check_vertices(const SoupFaces& f, const std::vector<char>& repeated_corner,
                     DisjointSets& corners, ProblemCollector& nonmanifold_vertex) {
   const std::size_t nv = f.soup.points.size();
   std::vector<std::size_t> first_root(nv, SIZE_MAX);
   std::vector<char> reported(nv, 0);
   for (std::size_t t = 0; t < f.tris.size(); ++t) {
-    if (is_degenerate[t]) continue;
+    if (repeated_corner[t]) continue;
     for (int k = 0; k < 3; ++k) {
       const std::uint32_t v = f.tris[t].v[k];
       const std::size_t root = corners.find(t * 3 + static_cast<std::size_t>(k));
@@ -353,7 +354,8 @@ PolygonSoup weld_positions(const PolygonSoup& soup, std::size_t& welded) {
 }
 
 /// The rules that make_surface() mends (after welding) when they are all that is left:
-/// inconsistent orientation (orient_faces_alike()) and pinched vertices (split_pinched_vertices()).
+/// inconsistent orientation (orient_faces_alike()), zero-area faces (flip_zero_area_faces(),
+/// last) and pinched vertices (split_pinched_vertices()).
 constexpr const char* kOrientationRule = "inconsistently oriented faces";
 constexpr const char* kZeroAreaRule = "degenerate (zero-area) faces";
 constexpr const char* kPinchedVertexRule = "non-manifold vertices (faces meeting only at a vertex)";
@@ -598,8 +600,8 @@ std::vector<SurfaceProblem> find_surface_problems(const PolygonSoup& soup,
                                   " of the bounding box diagonal (readers that weld positions "
                                   "join its ends)",
                               "collapse the short edges (merge each pair of vertices)", max);
-  std::vector<char> is_degenerate;
-  check_degenerate(faces, options, degenerate, short_edge, is_degenerate);
+  std::vector<char> repeated_corner;
+  check_degenerate(faces, options, degenerate, short_edge, repeated_corner);
   ProblemCollector duplicate("duplicate faces (the corners of another face)",
                              "remove the repeated faces, or join the parts that touch face to "
                              "face",
@@ -616,7 +618,7 @@ std::vector<SurfaceProblem> find_surface_problems(const PolygonSoup& soup,
   ProblemCollector nonmanifold_vertex(kPinchedVertexRule,
                                       "split the vertex or join the parts along an edge", max);
   if (nonmanifold_edge.problem.count == 0)
-    check_vertices(faces, is_degenerate, corners, nonmanifold_vertex);
+    check_vertices(faces, repeated_corner, corners, nonmanifold_vertex);
 
   // Crossings only mean something on an otherwise valid surface (neighbours across an edge are
   // told apart by the edge), and cost as much as the rest together: last.
@@ -714,7 +716,8 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
       return std::any_of(left.begin(), left.end(),
                          [&](const SurfaceProblem& p) { return p.rule == rule; }) &&
              std::all_of(left.begin(), left.end(), [](const SurfaceProblem& p) {
-               return p.rule == kOrientationRule || p.rule == kPinchedVertexRule;
+               return p.rule == kOrientationRule || p.rule == kPinchedVertexRule ||
+                      p.rule == kZeroAreaRule;
              });
     };
     welded = weld_positions(input, seam_vertices);

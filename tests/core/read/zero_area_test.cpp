@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "assets/shapes.h"
@@ -107,6 +108,21 @@ TEST(ZeroArea, FansOfZeroAreaFacesOnOneLineAreFlippedFromTheirEnd) {
       return s.find(std::to_string(zero) + " faces have zero area") != std::string::npos;
     })) << shape;
   }
+}
+
+TEST(ZeroArea, FacesTurnedTheWrongWayAreMendedFirst) {
+  // The fans of zero-area faces with every 7th face running against its neighbours: the faces
+  // are turned to agree, then the zero-area ones flipped (it was refused, both faults left).
+  std::vector<test::InsertedVertex> inserted;
+  const SurfaceMesh mesh = test::with_caps(make_shape("sphere", 1), 5, 0.0, 3, inserted);
+  PolygonSoup turned = polygon_soup_of(mesh);
+  for (std::size_t f = 0; f < turned.polygons.size(); f += 7)
+    std::swap(turned.polygons[f][1], turned.polygons[f][2]);
+  const LoadedSurface loaded = make_surface(turned, "turned");
+  EXPECT_GT(loaded.reoriented_faces, 0u);
+  ASSERT_FALSE(loaded.zero_area.empty());
+  EXPECT_EQ(oriented(loaded.mesh.triangles), oriented(mesh.triangles));  // as if never turned
+  expect_flips_glue(loaded.mesh, loaded.zero_area, 2e-14 * norm2(bounding_box(mesh).extent()));
 }
 
 TEST(ZeroArea, SurfacesThatFlipsCannotMendAreStillRefused) {
