@@ -257,9 +257,12 @@ std::string independent_shell_problems(const SurfaceMesh& surface, const TetMesh
       return problem.str();
     }
   }
-  TetMesh solid = shell;  // the tets with a volume
-  solid.tets.resize(shell.tets.size() - std::min(flat_tets, shell.tets.size()));
-  const auto [t, u] = first_overlap(solid);
+  TetMesh solid;  // the tets with a volume, when some are flat
+  if (flat_tets > 0) {
+    solid = shell;
+    solid.tets.resize(shell.tets.size() - std::min(flat_tets, shell.tets.size()));
+  }
+  const auto [t, u] = first_overlap(flat_tets > 0 ? solid : shell);
   if (t >= 0) {
     problem << "tets " << t << " and " << u << " overlap";
     return problem.str();

@@ -193,9 +193,9 @@ double points_diagonal(const std::vector<Vec3d>& points) {
   return box.diagonal();
 }
 
-/// Twice the area at or below which a face of a surface on `points` has zero area.
-double zero_twice_area(const std::vector<Vec3d>& points, const ValidationOptions& options) {
-  const double diag = points_diagonal(points);
+/// Twice the area at or below which a face of a surface of bounding-box diagonal `diag` has zero
+/// area.
+double zero_twice_area(double diag, const ValidationOptions& options) {
   return 2.0 * options.degenerate_area_fraction * diag * diag;
 }
 
@@ -206,7 +206,7 @@ void check_degenerate(const SoupFaces& f, const ValidationOptions& options,
                       std::vector<char>& repeated_corner) {
   const auto& pts = f.points();
   const double diag = points_diagonal(pts);
-  const double min_twice_area = zero_twice_area(pts, options);
+  const double min_twice_area = zero_twice_area(diag, options);
   const double min_edge = options.short_edge_fraction * diag;
   repeated_corner.assign(f.tris.size(), 0);
   for (std::size_t t = 0; t < f.tris.size(); ++t) {
@@ -791,7 +791,7 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
   }
   if (flip) {
     std::optional<ZeroAreaFlips> flips =
-        flip_zero_area_faces(out.mesh, zero_twice_area(out.mesh.points, options));
+        flip_zero_area_faces(out.mesh, zero_twice_area(points_diagonal(out.mesh.points), options));
     if (!flips) refuse();
     if (!find_surface_problems(polygon_soup_of(flipped_surface(out.mesh, *flips)), options).empty())
       refuse();

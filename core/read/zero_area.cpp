@@ -116,7 +116,7 @@ std::optional<ZeroAreaFlips> flip_zero_area_faces(const SurfaceMesh& mesh, doubl
 SurfaceMesh flipped_surface(const SurfaceMesh& mesh, const ZeroAreaFlips& flips) {
   SurfaceMesh out;
   out.points = mesh.points;
-  out.triangles = flips.empty() ? mesh.triangles : flips.triangles;
+  out.triangles = flips.triangles;
   return out;
 }
 

@@ -185,12 +185,19 @@ SectorShell join_sectors(const SurfaceMesh& surface, const SectorSplit& split, V
 void join_zero_area_faces(const SurfaceMesh& surface, const ZeroAreaFlips& flips,
                           std::size_t gap_tets, ValidShell& valid) {
   TetMesh& mesh = valid.shell.mesh;
+  const bool with_quality = mesh.quality.size() == mesh.tets.size();
   for (std::uint32_t& f : mesh.source_triangle) f = flips.face_of[f];
   mesh.tets.insert(mesh.tets.end(), flips.tets.begin(), flips.tets.end());
   mesh.source_triangle.insert(mesh.source_triangle.end(), flips.tet_face.begin(),
                               flips.tet_face.end());
   if (!mesh.layer.empty()) mesh.layer.resize(mesh.tets.size(), 1);
-  mesh.quality = tet_qualities(mesh);
+  if (with_quality) {  // the shell's tets keep theirs
+    for (const Tet& t : flips.tets)
+      mesh.quality.push_back(
+          tet_quality(mesh.points[t[0]], mesh.points[t[1]], mesh.points[t[2]], mesh.points[t[3]]));
+  } else {
+    mesh.quality = tet_qualities(mesh);
+  }
   ShellCheckOptions options;
   options.layers = valid.assemble.layers;
   options.extra_tets = gap_tets + flips.tets.size();

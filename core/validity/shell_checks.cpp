@@ -142,9 +142,13 @@ ShellCheckResult check_tets(const SurfaceMesh& surface, const TetMesh& mesh,
     std::vector<std::uint32_t> queries;
     for (std::size_t t = 0; t < shell_tets; ++t)
       if (!added || (*added)[t]) queries.push_back(static_cast<std::uint32_t>(t));
-    std::vector<std::uint32_t> near = added ? tets_near_added(mesh, *added) : queries;
-    near.erase(std::lower_bound(near.begin(), near.end(), shell_tets), near.end());
-    check_intersections(surface, mesh, near, queries, inside, options, result);
+    if (!added) {
+      check_intersections(surface, mesh, queries, queries, inside, options, result);
+    } else {
+      std::vector<std::uint32_t> near = tets_near_added(mesh, *added);
+      near.erase(std::lower_bound(near.begin(), near.end(), shell_tets), near.end());
+      check_intersections(surface, mesh, near, queries, inside, options, result);
+    }
   }
   result.seconds = seconds_since(start);
   return result;
