@@ -82,7 +82,8 @@ struct LoadedSurface {
 struct SurfaceProblem {
   std::string rule;
   std::size_t count = 0;
-  std::string first;  ///< e.g. "edge (3, 7) at (0, 0, 1)-(1, 0, 1)"
+  bool at_least = false;  ///< counting stopped at `count` (crossings: see find_surface_problems())
+  std::string first;      ///< e.g. "edge (3, 7) at (0, 0, 1)-(1, 0, 1)"
   std::string remedy;
 };
 

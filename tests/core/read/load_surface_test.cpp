@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -295,8 +296,43 @@ TEST(Validate, CrossingSurfaceIsRefusedNamingFacesAndAPoint) {
   };
   EXPECT_TRUE(on(x, 0) || on(y, 0) || on(z, 0)) << e;
   EXPECT_TRUE(on(x, 0.5) || on(y, 0.25) || on(z, 0.25)) << e;
+  EXPECT_FALSE(contains(e, "at least")) << e;  // a few crossings: all counted
   // Side by side, touching along the plane x = 1, they load.
   EXPECT_EQ(load_error("touching.obj", two_cubes_obj({1, 0.25, 0.25})), "");
+}
+
+TEST(Validate, CrumpledSurfaceCountsItsCrossingsOnlySoFar) {
+  // A sphere with its points dealt to other vertices: closed and manifold, every face across the
+  // ball, crossing a good share of the others (tens of thousands of pairs of 760 faces).
+  SurfaceMesh crumpled = make_shape("sphere");
+  const std::vector<Vec3d> points = crumpled.points;
+  const std::size_t n = points.size();
+  for (std::size_t i = 0; i < n; ++i) crumpled.points[i] = points[(i * 7919 + 13) % n];
+  ASSERT_NE(n % 7919, 0u);
+  const std::vector<SurfaceProblem> problems = find_surface_problems(polygon_soup_of(crumpled));
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_TRUE(contains(problems[0].rule, "self-intersections")) << problems[0].rule;
+  EXPECT_EQ(problems[0].count, 10000u);
+  EXPECT_TRUE(problems[0].at_least);
+  // The first pair named crosses, by the tests' own predicate.
+  unsigned f = 0, g = 0;
+  ASSERT_EQ(std::sscanf(problems[0].first.c_str(), "face %u and face %u", &f, &g), 2)
+      << problems[0].first;
+  const auto corners = [&](unsigned t) {
+    const Triangle& tri = crumpled.triangles[t];
+    return std::array<Vec3d, 3>{crumpled.points[tri[0]], crumpled.points[tri[1]],
+                                crumpled.points[tri[2]]};
+  };
+  EXPECT_TRUE(test::triangles_intersect(corners(f), corners(g))) << f << " " << g;
+  try {
+    make_surface(polygon_soup_of(crumpled), "crumpled.obj");
+    ADD_FAILURE() << "loaded";
+  } catch (const InputError& e) {
+    EXPECT_TRUE(contains(e.what(),
+                         "crumpled.obj: not a closed 2-manifold triangle surface: at "
+                         "least 10000 self-intersections"))
+        << std::string(e.what()).substr(0, 300);
+  }
 }
 
 /// `text`'s OBJ vertices times 2^k (std::ldexp: exact), as a soup.
