@@ -2,9 +2,11 @@
 #include "core/read/load_surface.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <numeric>
+#include <sstream>
 #include <tuple>
 #include <utility>
 
@@ -360,10 +362,86 @@ PolygonSoup weld_positions(const PolygonSoup& soup, std::size_t& welded) {
   return out;
 }
 
+/// `soup` with each vertex of its open edges (edges of one polygon) within `tolerance` of another
+/// such vertex made one with it (a group of them with the first, at its position), and how many
+/// vertices are gone in it (0, with an empty soup, when none is): a crack where two patches were
+/// written with their shared vertices a rounding apart. A group holding both ends of an edge is
+/// left as it is (welding would collapse the edge).
+PolygonSoup weld_open_seams(const PolygonSoup& soup, double tolerance, std::size_t& welded) {
+  welded = 0;
+  const std::int64_t n = static_cast<std::int64_t>(soup.points.size());
+  std::vector<std::pair<std::int64_t, std::int64_t>> edges;
+  for (const auto& poly : soup.polygons)
+    for (std::size_t k = 0; k < poly.size(); ++k) {
+      const std::int64_t a = poly[k], b = poly[(k + 1) % poly.size()];
+      if (a < 0 || a >= n || b < 0 || b >= n) return {};
+      edges.push_back({std::min(a, b), std::max(a, b)});
+    }
+  std::sort(edges.begin(), edges.end());
+  std::vector<char> open(soup.points.size(), 0);
+  for (std::size_t i = 0; i < edges.size();) {
+    std::size_t j = i;
+    while (j < edges.size() && edges[j] == edges[i]) ++j;
+    if (j - i == 1) open[edges[i].first] = open[edges[i].second] = 1;
+    i = j;
+  }
+  // The open edges' vertices by the cell of side `tolerance` they lie in; each one against those
+  // in its own and the 26 cells around.
+  BBox box;
+  for (const Vec3d& p : soup.points) box.expand(p);
+  using Cell = std::array<std::int64_t, 3>;
+  const auto cell_of = [&](const Vec3d& p) {
+    const Vec3d c = (p - box.lo) / tolerance;
+    return Cell{static_cast<std::int64_t>(std::floor(c.x)),
+                static_cast<std::int64_t>(std::floor(c.y)),
+                static_cast<std::int64_t>(std::floor(c.z))};
+  };
+  std::vector<std::pair<Cell, std::size_t>> cells;
+  for (std::size_t v = 0; v < soup.points.size(); ++v)
+    if (open[v]) cells.push_back({cell_of(soup.points[v]), v});
+  if (cells.empty() || !(tolerance > 0) || !(box.diagonal() / tolerance < 1e15)) return {};
+  std::sort(cells.begin(), cells.end());
+  DisjointSets groups(soup.points.size());
+  for (const auto& [cell, v] : cells)
+    for (std::int64_t dx = -1; dx <= 1; ++dx)
+      for (std::int64_t dy = -1; dy <= 1; ++dy)
+        for (std::int64_t dz = -1; dz <= 1; ++dz) {
+          const Cell near{cell[0] + dx, cell[1] + dy, cell[2] + dz};
+          for (auto it = std::lower_bound(cells.begin(), cells.end(),
+                                          std::make_pair(near, std::size_t{0}));
+               it != cells.end() && it->first == near; ++it)
+            if (it->second > v && distance(soup.points[v], soup.points[it->second]) <= tolerance)
+              groups.unite(v, it->second);
+        }
+  std::vector<char> collapses(soup.points.size(), 0);
+  for (const auto& [a, b] : edges)
+    if (groups.find(static_cast<std::size_t>(a)) == groups.find(static_cast<std::size_t>(b)))
+      collapses[groups.find(static_cast<std::size_t>(a))] = 1;
+  // Every vertex to its group's first (or itself), then the points left renumbered in order.
+  std::vector<std::int64_t> index(soup.points.size());
+  PolygonSoup out;
+  for (std::size_t v = 0; v < soup.points.size(); ++v) {
+    const std::size_t root = groups.find(v);
+    if (root != v && !collapses[root]) {
+      index[v] = index[root];
+      ++welded;
+    } else {
+      index[v] = static_cast<std::int64_t>(out.points.size());
+      out.points.push_back(soup.points[v]);
+    }
+  }
+  if (welded == 0) return {};
+  out.polygons = soup.polygons;
+  for (auto& poly : out.polygons)
+    for (std::int64_t& v : poly) v = index[static_cast<std::size_t>(v)];
+  return out;
+}
+
 /// The rules that make_surface() mends (after welding) when they are all that is left:
 /// inconsistent orientation (orient_faces_alike()), zero-area faces (flip_zero_area_faces(),
 /// last) and pinched vertices (split_pinched_vertices()).
 constexpr const char* kOrientationRule = "inconsistently oriented faces";
+constexpr const char* kBoundaryRule = "boundary edges (the surface is not closed)";
 constexpr const char* kZeroAreaRule = "degenerate (zero-area) faces";
 constexpr const char* kPinchedVertexRule = "non-manifold vertices (faces meeting only at a vertex)";
 
@@ -614,8 +692,7 @@ std::vector<SurfaceProblem> find_surface_problems(const PolygonSoup& soup,
                              "face",
                              max);
   check_duplicates(faces, duplicate);
-  ProblemCollector boundary("boundary edges (the surface is not closed)",
-                            "close the holes or rebuild a watertight surface", max);
+  ProblemCollector boundary(kBoundaryRule, "close the holes or rebuild a watertight surface", max);
   ProblemCollector nonmanifold_edge("non-manifold edges (more than two faces on an edge)",
                                     "remove or separate the extra faces", max);
   ProblemCollector orientation(kOrientationRule,
@@ -708,8 +785,8 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
   // surface meeting only at a vertex, that vertex split, one per fan.
   // Zero-area faces, when nothing else is left, are flipped away (zero_area.h) once the surface
   // is oriented, kept only if that makes a valid surface.
-  std::size_t seam_vertices = 0, reoriented_faces = 0, pinched_vertices = 0;
-  PolygonSoup welded, oriented, split;
+  std::size_t seam_vertices = 0, crack_vertices = 0, reoriented_faces = 0, pinched_vertices = 0;
+  PolygonSoup welded, near_welded, oriented, split;
   const PolygonSoup* mended = &input;
   bool flip = false;
   if (!problems.empty()) {
@@ -729,6 +806,12 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
     };
     welded = weld_positions(input, seam_vertices);
     take(welded, seam_vertices);
+    if (std::any_of(left.begin(), left.end(),
+                    [](const SurfaceProblem& p) { return p.rule == kBoundaryRule; })) {
+      near_welded = weld_open_seams(
+          *mended, options.open_seam_fraction * points_diagonal(mended->points), crack_vertices);
+      take(near_welded, crack_vertices);
+    }
     if (left_only(kOrientationRule)) {
       oriented = orient_faces_alike(*mended, reoriented_faces);
       take(oriented, reoriented_faces);
@@ -758,6 +841,7 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
   LoadedSurface out;
   out.source = source;
   out.seam_vertices = seam_vertices;
+  out.crack_vertices = crack_vertices;
   out.reoriented_faces = reoriented_faces;
   out.pinched_vertices = pinched_vertices;
   out.polygons_read = soup.polygons.size();
@@ -815,6 +899,15 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
   note(out.seam_vertices,
        " vertices at the position of an earlier vertex (seams written twice) were welded to it: "
        "welded, the surface is closed");
+  if (out.crack_vertices) {
+    std::ostringstream at;
+    at << options.open_seam_fraction;
+    out.notices.push_back(std::to_string(out.crack_vertices) + " vertices of open edges within " +
+                          at.str() +
+                          " of the bounding box diagonal of another were welded to it (a crack "
+                          "where two patches' shared vertices were written a rounding apart): "
+                          "welded, the surface is closed");
+  }
   note(out.reoriented_faces,
        " faces ran against their neighbours (inconsistent orientation) and were turned to agree "
        "with them");

@@ -35,6 +35,9 @@ struct ValidationOptions {
   /// readers that weld positions within it (the independent checker does, at 1e-9) join the
   /// edge's ends and see the face collapse. 0: no limit.
   double short_edge_fraction = 1e-9;
+  /// Vertices of open edges closer than this fraction of the bounding-box diagonal to another
+  /// are welded when that closes the surface (cracks between patches written a rounding apart).
+  double open_seam_fraction = 1e-7;
 };
 
 /// Facts about a valid surface (what `vdb_shell INPUT` prints).
@@ -60,6 +63,9 @@ struct LoadedSurface {
   /// Vertices at exactly the position of an earlier one, welded to it: seams written twice
   /// (make_surface() welds them only when that makes a valid surface of an invalid one).
   std::size_t seam_vertices = 0;
+  /// Vertices of open edges within ValidationOptions::open_seam_fraction of another, welded to it
+  /// (make_surface() welds them only when that makes a valid surface of one with open edges).
+  std::size_t crack_vertices = 0;
   /// Faces turned to run against their neighbours along every shared edge, as a consistently
   /// oriented surface's do (make_surface() turns them only when that, after any welding, makes a
   /// valid surface of an invalid one; which way the whole faces is decided after).

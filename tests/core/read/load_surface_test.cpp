@@ -468,6 +468,62 @@ TEST(Validate, SeamsWrittenTwiceAreWeldedWithNotice) {
   EXPECT_EQ(load_surface(dir.file("apart.obj")).seam_vertices, 28u);
 }
 
+/// `mesh` cut in two along its vertices shared by faces on both sides of x = 0: the faces with
+/// their centroid at x >= 0 get copies of those vertices, moved by `apart` times the bounding box
+/// diagonal (a crack between two patches). Returns the soup and how many vertices were copied.
+std::pair<PolygonSoup, std::size_t> cracked(const SurfaceMesh& mesh, double apart) {
+  PolygonSoup soup = polygon_soup_of(mesh);
+  const double d = apart * bounding_box(mesh).diagonal();
+  std::vector<char> left(mesh.points.size(), 0), right(mesh.points.size(), 0);
+  const auto side = [&](const Triangle& t) {
+    return mesh.points[t[0]].x + mesh.points[t[1]].x + mesh.points[t[2]].x >= 0;
+  };
+  for (const Triangle& t : mesh.triangles)
+    for (const std::uint32_t v : t) (side(t) ? right : left)[v] = 1;
+  std::vector<std::int64_t> copy(mesh.points.size(), -1);
+  for (std::size_t v = 0; v < mesh.points.size(); ++v)
+    if (left[v] && right[v]) {
+      copy[v] = std::int64_t(soup.points.size());
+      // A different direction per vertex, of length d.
+      const double a = 0.7 * double(v), b = 1.3 * double(v);
+      soup.points.push_back(
+          mesh.points[v] +
+          Vec3d{std::cos(a) * std::sin(b), std::sin(a) * std::sin(b), std::cos(b)} * d);
+    }
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f)
+    if (side(mesh.triangles[f]))
+      for (std::int64_t& v : soup.polygons[f])
+        if (copy[std::size_t(v)] >= 0) v = copy[std::size_t(v)];
+  return {soup, soup.points.size() - mesh.points.size()};
+}
+
+TEST(Validate, CracksBetweenPatchesWrittenARoundingApartAreWelded) {
+  for (const char* name : {"sphere", "torus", "box"}) {
+    const SurfaceMesh mesh = make_shape(name);
+    const auto [crack, copies] = cracked(mesh, 1e-8);
+    ASSERT_GE(copies, 8u) << name;
+    ASSERT_TRUE(contains(find_surface_problems(crack)[0].rule, "boundary edges")) << name;
+    const LoadedSurface s = make_surface(crack, name);
+    EXPECT_EQ(s.crack_vertices, copies) << name;
+    EXPECT_EQ(s.seam_vertices, 0u) << name;
+    ASSERT_FALSE(s.notices.empty()) << name;
+    EXPECT_TRUE(contains(s.notices[0], std::to_string(copies) + " vertices of open edges"))
+        << s.notices[0];
+    // The input mesh back: its points (the copies gone), its triangles in order.
+    EXPECT_EQ(s.mesh.points, mesh.points) << name;
+    EXPECT_EQ(s.mesh.triangles, mesh.triangles) << name;
+    // Cracks wider than the tolerance stay open edges.
+    const auto [wide, wide_copies] = cracked(mesh, 1e-6);
+    ASSERT_EQ(wide_copies, copies);
+    try {
+      make_surface(wide, name);
+      ADD_FAILURE() << name << ": loaded";
+    } catch (const InputError& e) {
+      EXPECT_TRUE(contains(e.what(), std::to_string(2 * copies) + " boundary edges")) << e.what();
+    }
+  }
+}
+
 TEST(Validate, WeldingIsNotAFixForOtherProblems) {
   // Seams and a hole: still refused, with the problems as written.
   PolygonSoup holed = cube_written_apart();
