@@ -437,11 +437,40 @@ PolygonSoup weld_open_seams(const PolygonSoup& soup, double tolerance, std::size
   return out;
 }
 
+/// `soup` without the polygons that repeat an earlier one corner for corner, in the same
+/// direction (a face written twice), and how many are gone (0, with an empty soup, when none).
+/// The first polygon dropped is `first`.
+PolygonSoup drop_repeated_polygons(const PolygonSoup& soup, std::size_t& dropped,
+                                   std::size_t& first) {
+  dropped = 0;
+  // Each polygon's corners from its smallest index on: equal for the same cycle in one direction.
+  std::vector<std::pair<std::vector<std::int64_t>, std::size_t>> cycles(soup.polygons.size());
+  for (std::size_t p = 0; p < soup.polygons.size(); ++p) {
+    std::vector<std::int64_t> c = soup.polygons[p];
+    std::rotate(c.begin(), std::min_element(c.begin(), c.end()), c.end());
+    cycles[p] = {std::move(c), p};
+  }
+  std::sort(cycles.begin(), cycles.end());
+  std::vector<char> repeat(soup.polygons.size(), 0);
+  for (std::size_t i = 1; i < cycles.size(); ++i)
+    if (cycles[i].first == cycles[i - 1].first) repeat[cycles[i].second] = 1;
+  PolygonSoup out;
+  for (std::size_t p = 0; p < soup.polygons.size(); ++p)
+    if (!repeat[p])
+      out.polygons.push_back(soup.polygons[p]);
+    else if (dropped++ == 0)
+      first = p;
+  if (dropped == 0) return {};
+  out.points = soup.points;
+  return out;
+}
+
 /// The rules that make_surface() mends (after welding) when they are all that is left:
 /// inconsistent orientation (orient_faces_alike()), zero-area faces (flip_zero_area_faces(),
 /// last) and pinched vertices (split_pinched_vertices()).
 constexpr const char* kOrientationRule = "inconsistently oriented faces";
 constexpr const char* kBoundaryRule = "boundary edges (the surface is not closed)";
+constexpr const char* kDuplicateRule = "duplicate faces (the corners of another face)";
 constexpr const char* kZeroAreaRule = "degenerate (zero-area) faces";
 constexpr const char* kPinchedVertexRule = "non-manifold vertices (faces meeting only at a vertex)";
 
@@ -687,7 +716,7 @@ std::vector<SurfaceProblem> find_surface_problems(const PolygonSoup& soup,
                               "collapse the short edges (merge each pair of vertices)", max);
   std::vector<char> repeated_corner;
   check_degenerate(faces, options, degenerate, short_edge, repeated_corner);
-  ProblemCollector duplicate("duplicate faces (the corners of another face)",
+  ProblemCollector duplicate(kDuplicateRule,
                              "remove the repeated faces, or join the parts that touch face to "
                              "face",
                              max);
@@ -785,8 +814,9 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
   // surface meeting only at a vertex, that vertex split, one per fan.
   // Zero-area faces, when nothing else is left, are flipped away (zero_area.h) once the surface
   // is oriented, kept only if that makes a valid surface.
-  std::size_t seam_vertices = 0, crack_vertices = 0, reoriented_faces = 0, pinched_vertices = 0;
-  PolygonSoup welded, near_welded, oriented, split;
+  std::size_t seam_vertices = 0, crack_vertices = 0, repeated_faces = 0, first_repeated = 0,
+              reoriented_faces = 0, pinched_vertices = 0;
+  PolygonSoup welded, near_welded, once, oriented, split;
   const PolygonSoup* mended = &input;
   bool flip = false;
   if (!problems.empty()) {
@@ -796,21 +826,26 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
       mended = &soup;
       left = find_surface_problems(soup, options);
     };
-    const auto left_only = [&](const char* rule) {
+    const auto left_has = [&](const char* rule) {
       return std::any_of(left.begin(), left.end(),
-                         [&](const SurfaceProblem& p) { return p.rule == rule; }) &&
-             std::all_of(left.begin(), left.end(), [](const SurfaceProblem& p) {
+                         [&](const SurfaceProblem& p) { return p.rule == rule; });
+    };
+    const auto left_only = [&](const char* rule) {
+      return left_has(rule) && std::all_of(left.begin(), left.end(), [](const SurfaceProblem& p) {
                return p.rule == kOrientationRule || p.rule == kPinchedVertexRule ||
                       p.rule == kZeroAreaRule;
              });
     };
     welded = weld_positions(input, seam_vertices);
     take(welded, seam_vertices);
-    if (std::any_of(left.begin(), left.end(),
-                    [](const SurfaceProblem& p) { return p.rule == kBoundaryRule; })) {
+    if (left_has(kBoundaryRule)) {
       near_welded = weld_open_seams(
           *mended, options.open_seam_fraction * points_diagonal(mended->points), crack_vertices);
       take(near_welded, crack_vertices);
+    }
+    if (left_has(kDuplicateRule)) {
+      once = drop_repeated_polygons(*mended, repeated_faces, first_repeated);
+      take(once, repeated_faces);
     }
     if (left_only(kOrientationRule)) {
       oriented = orient_faces_alike(*mended, reoriented_faces);
@@ -842,6 +877,7 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
   out.source = source;
   out.seam_vertices = seam_vertices;
   out.crack_vertices = crack_vertices;
+  out.repeated_faces = repeated_faces;
   out.reoriented_faces = reoriented_faces;
   out.pinched_vertices = pinched_vertices;
   out.polygons_read = soup.polygons.size();
@@ -908,6 +944,12 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
                           "where two patches' shared vertices were written a rounding apart): "
                           "welded, the surface is closed");
   }
+  if (out.repeated_faces)
+    out.notices.push_back(std::to_string(out.repeated_faces) +
+                          " faces repeated an earlier face corner for corner (written twice) and "
+                          "were dropped, the first being polygon " +
+                          std::to_string(first_repeated) +
+                          " (the shell's source_triangle counts the faces without them)");
   note(out.reoriented_faces,
        " faces ran against their neighbours (inconsistent orientation) and were turned to agree "
        "with them");

@@ -66,6 +66,9 @@ struct LoadedSurface {
   /// Vertices of open edges within ValidationOptions::open_seam_fraction of another, welded to it
   /// (make_surface() welds them only when that makes a valid surface of one with open edges).
   std::size_t crack_vertices = 0;
+  /// Faces repeating an earlier one corner for corner in the same direction (written twice),
+  /// dropped (make_surface() drops them only when that makes a valid surface).
+  std::size_t repeated_faces = 0;
   /// Faces turned to run against their neighbours along every shared edge, as a consistently
   /// oriented surface's do (make_surface() turns them only when that, after any welding, makes a
   /// valid surface of an invalid one; which way the whole faces is decided after).

@@ -348,7 +348,8 @@ BAD_INPUTS = {
     "negative index": (lambda v, f: (v, with_index(f, 4, 2, -1)), ["face 4", "-1"]),
     "huge uint64 index": (lambda v, f: (v, with_index(f.astype(np.uint64), 6, 0, 2**64 - 1)),
                           ["face 6", "out-of-range"]),
-    "duplicate face": (lambda v, f: (v, np.vstack([f, f[:1]])), ["duplicate"]),
+    # (A face written twice the same way round is dropped; the other way round it is refused.)
+    "duplicate face": (lambda v, f: (v, np.vstack([f, f[:1, ::-1]])), ["duplicate"]),
 }
 
 

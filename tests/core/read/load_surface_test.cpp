@@ -524,6 +524,26 @@ TEST(Validate, CracksBetweenPatchesWrittenARoundingApartAreWelded) {
   }
 }
 
+TEST(Validate, FacesWrittenTwiceAreDropped) {
+  // Faces 0 and 5 written again, the second from another corner: 14 faces, 4 edges in 3 faces.
+  const std::string twice = cube_obj(-1, "f 1 3 2\nf 6 5 1\n");
+  ASSERT_FALSE(find_surface_problems(scaled_obj_soup(twice, 0)).empty());
+  const LoadedSurface s = make_surface(scaled_obj_soup(twice, 0), "twice.obj");
+  EXPECT_EQ(s.repeated_faces, 2u);
+  ASSERT_EQ(s.mesh.triangles.size(), 12u);
+  EXPECT_NEAR(s.stats.enclosed_volume, 1.0, 1e-12);
+  // The file's first 12 faces, as written.
+  const LoadedSurface cube = make_surface(scaled_obj_soup(cube_obj(), 0), "cube.obj");
+  EXPECT_EQ(s.mesh.triangles, cube.mesh.triangles);
+  ASSERT_FALSE(s.notices.empty());
+  EXPECT_TRUE(contains(s.notices[0], "2 faces repeated an earlier face")) << s.notices[0];
+  EXPECT_TRUE(contains(s.notices[0], "polygon 12")) << s.notices[0];
+  // Written again the other way round, a face is no repeat: refused.
+  const std::string e = load_error("reversed.obj", cube_obj(-1, "f 1 2 3\n"));
+  EXPECT_TRUE(contains(e, "duplicate faces")) << e;
+  EXPECT_TRUE(contains(e, "non-manifold edges")) << e;
+}
+
 TEST(Validate, WeldingIsNotAFixForOtherProblems) {
   // Seams and a hole: still refused, with the problems as written.
   PolygonSoup holed = cube_written_apart();
