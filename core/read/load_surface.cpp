@@ -437,6 +437,110 @@ PolygonSoup weld_open_seams(const PolygonSoup& soup, double tolerance, std::size
   return out;
 }
 
+/// `soup` with every loop of its open edges that runs along one line — its vertices within
+/// `max_width` of the line through its two farthest — closed by slivers (`added` of them, after
+/// the soup's polygons; 0, with an empty soup, when no loop is closed): a crack where one side has
+/// vertices on an edge of the other (T-junctions). Each sliver cuts off a vertex lying between its
+/// two neighbours along the line, so each is of zero area where the vertices are on the line.
+PolygonSoup close_thin_cracks(const PolygonSoup& soup, double max_width, std::size_t& added) {
+  added = 0;
+  const std::int64_t n = static_cast<std::int64_t>(soup.points.size());
+  // Directed edges, each with whether it is open (its undirected edge in no other polygon).
+  std::vector<
+      std::pair<std::pair<std::int64_t, std::int64_t>, std::pair<std::int64_t, std::int64_t>>>
+      edges;  // {undirected, directed}
+  for (const auto& poly : soup.polygons)
+    for (std::size_t k = 0; k < poly.size(); ++k) {
+      const std::int64_t a = poly[k], b = poly[(k + 1) % poly.size()];
+      if (a < 0 || a >= n || b < 0 || b >= n || a == b) return {};
+      edges.push_back({{std::min(a, b), std::max(a, b)}, {a, b}});
+    }
+  std::sort(edges.begin(), edges.end());
+  // The open edges, by their first vertex.
+  std::vector<std::pair<std::int64_t, std::int64_t>> open;
+  for (std::size_t i = 0; i < edges.size();) {
+    std::size_t j = i;
+    while (j < edges.size() && edges[j].first == edges[i].first) ++j;
+    if (j - i == 1) open.push_back(edges[i].second);
+    i = j;
+  }
+  std::sort(open.begin(), open.end());
+  std::vector<char> used(open.size(), 0);
+  PolygonSoup out = soup;
+  for (std::size_t first = 0; first < open.size(); ++first) {
+    if (used[first]) continue;
+    // A loop from this edge on; where two open edges leave a vertex (two cracks meet there), the
+    // one turning back the most (a crack's loop turns back at both its ends, runs straight on
+    // between them).
+    used[first] = 1;
+    std::vector<std::int64_t> loop{open[first].first};
+    std::int64_t from = open[first].first, at = open[first].second;
+    while (at != loop[0]) {
+      loop.push_back(at);
+      auto it = std::lower_bound(open.begin(), open.end(), std::make_pair(at, std::int64_t{-1}));
+      std::size_t best = open.size();
+      double best_turn = INFINITY;
+      for (; it != open.end() && it->first == at; ++it) {
+        const std::size_t e = static_cast<std::size_t>(it - open.begin());
+        if (used[e]) continue;
+        const double turn = dot(normalized(soup.points[at] - soup.points[from]),
+                                normalized(soup.points[it->second] - soup.points[at]));
+        if (turn < best_turn) best = e, best_turn = turn;
+      }
+      if (best == open.size()) break;
+      used[best] = 1;
+      from = at;
+      at = open[best].second;
+    }
+    if (at != loop[0] || loop.size() < 3) continue;
+    // The line: through the loop's vertex farthest from its first and the one farthest from that.
+    const auto farthest = [&](const Vec3d& from) {
+      return *std::max_element(loop.begin(), loop.end(), [&](std::int64_t a, std::int64_t b) {
+        return distance(soup.points[a], from) < distance(soup.points[b], from);
+      });
+    };
+    const Vec3d p = soup.points[farthest(soup.points[loop[0]])];
+    const Vec3d q = soup.points[farthest(p)];
+    if (!(distance(p, q) > 0)) continue;
+    const Vec3d axis = normalized(q - p);
+    std::vector<double> along(loop.size());
+    bool thin = true;
+    for (std::size_t i = 0; i < loop.size(); ++i) {
+      const Vec3d d = soup.points[loop[i]] - p;
+      along[i] = dot(d, axis);
+      thin = thin && norm(d - axis * along[i]) <= max_width;
+    }
+    if (!thin) continue;
+    // Slivers cut off the loop run the other way round (the open edges' other sides), each at the
+    // first vertex lying strictly between its neighbours along the line.
+    std::vector<std::size_t> left(loop.size());
+    std::iota(left.begin(), left.end(), std::size_t{0});
+    std::reverse(left.begin(), left.end());
+    // (A cut changes only its neighbours: the next search starts at the one before it.)
+    std::vector<std::vector<std::int64_t>> slivers;
+    for (std::size_t from_i = 0; left.size() >= 3;) {
+      const std::size_t m = left.size();
+      std::size_t cut = m;
+      for (std::size_t j = 0; j < m && cut == m; ++j) {
+        const std::size_t i = (from_i + j) % m;
+        const double a = along[left[(i + m - 1) % m]], b = along[left[i]],
+                     c = along[left[(i + 1) % m]];
+        if ((a < b && b < c) || (a > b && b > c)) cut = i;
+      }
+      if (cut == m) break;
+      slivers.push_back(
+          {loop[left[(cut + m - 1) % m]], loop[left[cut]], loop[left[(cut + 1) % m]]});
+      left.erase(left.begin() + static_cast<std::ptrdiff_t>(cut));
+      from_i = cut > 0 ? cut - 1 : 0;
+    }
+    if (left.size() > 2) continue;  // zig-zags back and forth: left open
+    added += slivers.size();
+    for (auto& sliver : slivers) out.polygons.push_back(std::move(sliver));
+  }
+  if (added == 0) return {};
+  return out;
+}
+
 /// `soup` without the polygons that repeat an earlier one corner for corner, in the same
 /// direction (a face written twice), and how many are gone (0, with an empty soup, when none).
 /// The first polygon dropped is `first`.
@@ -814,9 +918,9 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
   // surface meeting only at a vertex, that vertex split, one per fan.
   // Zero-area faces, when nothing else is left, are flipped away (zero_area.h) once the surface
   // is oriented, kept only if that makes a valid surface.
-  std::size_t seam_vertices = 0, crack_vertices = 0, repeated_faces = 0, first_repeated = 0,
-              reoriented_faces = 0, pinched_vertices = 0;
-  PolygonSoup welded, near_welded, once, oriented, split;
+  std::size_t seam_vertices = 0, crack_vertices = 0, crack_faces = 0, repeated_faces = 0,
+              first_repeated = 0, reoriented_faces = 0, pinched_vertices = 0;
+  PolygonSoup welded, near_welded, slivered, once, oriented, split;
   const PolygonSoup* mended = &input;
   bool flip = false;
   if (!problems.empty()) {
@@ -842,6 +946,11 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
       near_welded = weld_open_seams(
           *mended, options.open_seam_fraction * points_diagonal(mended->points), crack_vertices);
       take(near_welded, crack_vertices);
+    }
+    if (left_has(kBoundaryRule)) {
+      slivered = close_thin_cracks(
+          *mended, options.t_junction_fraction * points_diagonal(mended->points), crack_faces);
+      take(slivered, crack_faces);
     }
     if (left_has(kDuplicateRule)) {
       once = drop_repeated_polygons(*mended, repeated_faces, first_repeated);
@@ -877,6 +986,7 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
   out.source = source;
   out.seam_vertices = seam_vertices;
   out.crack_vertices = crack_vertices;
+  out.crack_faces = crack_faces;
   out.repeated_faces = repeated_faces;
   out.reoriented_faces = reoriented_faces;
   out.pinched_vertices = pinched_vertices;
@@ -944,6 +1054,13 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
                           "where two patches' shared vertices were written a rounding apart): "
                           "welded, the surface is closed");
   }
+  if (out.crack_faces)
+    out.notices.push_back(
+        std::to_string(out.crack_faces) +
+        " slivers were added to close cracks along a line where one side has vertices on an "
+        "edge of the other (T-junctions): closed, the surface is valid; they come after the "
+        "input's faces (source_triangle " +
+        std::to_string(out.mesh.triangles.size() - out.crack_faces) + " on)");
   if (out.repeated_faces)
     out.notices.push_back(std::to_string(out.repeated_faces) +
                           " faces repeated an earlier face corner for corner (written twice) and "

@@ -38,6 +38,10 @@ struct ValidationOptions {
   /// Vertices of open edges closer than this fraction of the bounding-box diagonal to another
   /// are welded when that closes the surface (cracks between patches written a rounding apart).
   double open_seam_fraction = 1e-7;
+  /// Loops of open edges along one line, their vertices within this fraction of the
+  /// bounding-box diagonal of it, are closed by slivers when that makes a valid surface (cracks
+  /// where one side has vertices on an edge of the other: T-junctions).
+  double t_junction_fraction = 1e-6;
 };
 
 /// Facts about a valid surface (what `vdb_shell INPUT` prints).
@@ -66,6 +70,9 @@ struct LoadedSurface {
   /// Vertices of open edges within ValidationOptions::open_seam_fraction of another, welded to it
   /// (make_surface() welds them only when that makes a valid surface of one with open edges).
   std::size_t crack_vertices = 0;
+  /// Slivers added to close loops of open edges along a line (T-junctions), after the input's
+  /// faces (make_surface() adds them only when that makes a valid surface).
+  std::size_t crack_faces = 0;
   /// Faces repeating an earlier one corner for corner in the same direction (written twice),
   /// dropped (make_surface() drops them only when that makes a valid surface).
   std::size_t repeated_faces = 0;

@@ -9,6 +9,8 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <map>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -521,6 +523,52 @@ TEST(Validate, CracksBetweenPatchesWrittenARoundingApartAreWelded) {
     } catch (const InputError& e) {
       EXPECT_TRUE(contains(e.what(), std::to_string(2 * copies) + " boundary edges")) << e.what();
     }
+  }
+}
+
+TEST(Validate, OnlyCracksAlongALineAreClosedBySlivers) {
+  // The sphere with 3 vertices on an edge of every 5th face, `height` of the edge off it: the
+  // face fanned, its neighbour whole, the caps between them left out (test::with_caps()).
+  const auto cracked = [](double height, std::size_t& caps) {
+    std::vector<test::InsertedVertex> inserted;
+    const SurfaceMesh capped = test::with_caps(make_shape("sphere"), 5, height, 3, inserted);
+    SurfaceMesh out = capped;
+    out.triangles.clear();
+    // A cap has its three corners on one strip: the edge's ends and the vertices on it.
+    std::map<std::pair<std::uint32_t, std::uint32_t>, std::set<std::uint32_t>> strips;
+    for (const test::InsertedVertex& m : inserted)
+      strips[{m.near, m.far}].insert({m.near, m.far, m.vertex});
+    for (const Triangle& t : capped.triangles) {
+      bool cap = false;
+      for (const auto& [edge, on] : strips)
+        cap = cap || (on.count(t[0]) && on.count(t[1]) && on.count(t[2]));
+      if (!cap) out.triangles.push_back(t);
+    }
+    caps = capped.triangles.size() - out.triangles.size();
+    return out;
+  };
+  std::size_t caps = 0;
+  const SurfaceMesh on_line = cracked(0.0, caps);
+  ASSERT_GT(caps, 20u);
+  const LoadedSurface s = make_surface(polygon_soup_of(on_line), "on_line");
+  EXPECT_EQ(s.crack_faces, caps);
+  EXPECT_EQ(s.zero_area.tets.size(), caps);  // every sliver of zero area, flipped away
+  ASSERT_EQ(s.mesh.triangles.size(), on_line.triangles.size() + caps);
+  for (std::size_t f = on_line.triangles.size(); f < s.mesh.triangles.size(); ++f) {
+    const Triangle& t = s.mesh.triangles[f];
+    const Vec3d &a = s.mesh.points[t[0]], &b = s.mesh.points[t[1]], &c = s.mesh.points[t[2]];
+    EXPECT_LT(norm(cross(b - a, c - a)), 1e-15) << f;
+  }
+  ASSERT_FALSE(s.notices.empty());
+  EXPECT_TRUE(contains(s.notices.back(), std::to_string(caps) + " slivers were added"))
+      << s.notices.back();
+  // 1e-3 of the edge off it, the cracks are no line: left open.
+  const SurfaceMesh off_line = cracked(1e-3, caps);
+  try {
+    make_surface(polygon_soup_of(off_line), "off_line");
+    ADD_FAILURE() << "loaded";
+  } catch (const InputError& e) {
+    EXPECT_TRUE(contains(e.what(), "boundary edges")) << e.what();
   }
 }
 
