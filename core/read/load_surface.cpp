@@ -571,7 +571,9 @@ PolygonSoup drop_repeated_polygons(const PolygonSoup& soup, std::size_t& dropped
 
 /// The rules that make_surface() mends (after welding) when they are all that is left:
 /// inconsistent orientation (orient_faces_alike()), zero-area faces (flip_zero_area_faces(),
-/// last) and pinched vertices (split_pinched_vertices()).
+/// last) and pinched vertices (split_pinched_vertices()); and those it tries to mend whenever
+/// they are broken: open edges (weld_open_seams(), close_thin_cracks()) and duplicate faces
+/// (drop_repeated_polygons()).
 constexpr const char* kOrientationRule = "inconsistently oriented faces";
 constexpr const char* kBoundaryRule = "boundary edges (the surface is not closed)";
 constexpr const char* kDuplicateRule = "duplicate faces (the corners of another face)";
@@ -913,7 +915,9 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
   // Faults mended keeping every polygon as written (but for its direction), tried only on a
   // surface that fails as it is (the parts of a valid surface that touch keep their own
   // vertices) and kept only if the result passes every rule. Seams: vertices repeated at exactly
-  // one position along UV or normal seams, made one. Then, if nothing else is left, faces
+  // one position along UV or normal seams, made one. If open edges are left, cracks: their
+  // vertices a rounding apart made one, then loops of them along a line (T-junctions) closed by
+  // slivers. Faces written twice: the repeats dropped. Then, if nothing else is left, faces
   // running against their neighbours, turned to agree with them; and pinches: parts of the
   // surface meeting only at a vertex, that vertex split, one per fan.
   // Zero-area faces, when nothing else is left, are flipped away (zero_area.h) once the surface
