@@ -456,8 +456,11 @@ LoadedSurface load_repaired_surface(const PolygonSoup& soup, const std::string& 
     report.faces = kept.mesh.triangles.size();
     report.seconds = seconds_since(t0);
     kept.notices.insert(kept.notices.begin(),
-                        "the input is already closed, 2-manifold and not crossing itself: "
-                        "--repair kept it as it is");
+                        std::string(kept.notices.empty() ? "the input is already"
+                                                         : "the input, mended as the notes below "
+                                                           "say, is") +
+                            " closed, 2-manifold and not crossing itself: --repair kept it as it "
+                            "is");
     return kept;
   } catch (const InputError&) {  // something to repair
   }
