@@ -389,6 +389,7 @@ PolygonSoup weld_open_seams(const PolygonSoup& soup, double tolerance, std::size
   // in its own and the 26 cells around.
   BBox box;
   for (const Vec3d& p : soup.points) box.expand(p);
+  if (!(tolerance > 0) || !(box.diagonal() / tolerance < 1e15)) return {};  // (NaN too)
   using Cell = std::array<std::int64_t, 3>;
   const auto cell_of = [&](const Vec3d& p) {
     const Vec3d c = (p - box.lo) / tolerance;
@@ -398,8 +399,8 @@ PolygonSoup weld_open_seams(const PolygonSoup& soup, double tolerance, std::size
   };
   std::vector<std::pair<Cell, std::size_t>> cells;
   for (std::size_t v = 0; v < soup.points.size(); ++v)
-    if (open[v]) cells.push_back({cell_of(soup.points[v]), v});
-  if (cells.empty() || !(tolerance > 0) || !(box.diagonal() / tolerance < 1e15)) return {};
+    if (open[v] && is_finite(soup.points[v])) cells.push_back({cell_of(soup.points[v]), v});
+  if (cells.empty()) return {};
   std::sort(cells.begin(), cells.end());
   DisjointSets groups(soup.points.size());
   for (const auto& [cell, v] : cells)
