@@ -572,14 +572,15 @@ PolygonSoup drop_repeated_polygons(const PolygonSoup& soup, std::size_t& dropped
 
 /// The rules that make_surface() mends (after welding) when they are all that is left:
 /// inconsistent orientation (orient_faces_alike()), zero-area faces (flip_zero_area_faces(),
-/// last) and pinched vertices (split_pinched_vertices()); and those it tries to mend whenever
-/// they are broken: open edges (weld_open_seams(), close_thin_cracks()) and duplicate faces
-/// (drop_repeated_polygons()).
+/// last), pinched vertices and edges where parts touch (split_pinched_vertices()); and those it
+/// tries to mend whenever they are broken: open edges (weld_open_seams(), close_thin_cracks()) and
+/// duplicate faces (drop_repeated_polygons()).
 constexpr const char* kOrientationRule = "inconsistently oriented faces";
 constexpr const char* kBoundaryRule = "boundary edges (the surface is not closed)";
 constexpr const char* kDuplicateRule = "duplicate faces (the corners of another face)";
 constexpr const char* kZeroAreaRule = "degenerate (zero-area) faces";
 constexpr const char* kPinchedVertexRule = "non-manifold vertices (faces meeting only at a vertex)";
+constexpr const char* kTouchingEdgeRule = "non-manifold edges (more than two faces on an edge)";
 
 /// One side of a polygon: its ends (lo < hi), the polygon's corners there (indices into all
 /// corners, polygon by polygon), the polygon, and whether it runs from lo to hi.
@@ -679,19 +680,82 @@ PolygonSoup orient_faces_alike(const PolygonSoup& soup, std::size_t& turned) {
   return out;
 }
 
+/// The sides [i, j) of one edge (more than two), paired up where parts of a surface touch along
+/// it (a union of solids meeting only along the edge, a solid touching itself): around the edge,
+/// polygons must alternate in direction, and each is paired with its neighbour on the side where
+/// it faces into the solid. Returns the pairs as offsets from i (empty when the polygons do not
+/// alternate or two lie in one half-plane, e.g. parts touching face to face).
+std::vector<std::pair<std::size_t, std::size_t>> touching_pairs(
+    const PolygonSoup& soup, const std::vector<Side>& sides, const std::vector<std::size_t>& start,
+    std::size_t i, std::size_t j) {
+  const std::size_t n = j - i;
+  if (n % 2) return {};
+  const Vec3d lo = soup.points[static_cast<std::size_t>(sides[i].lo)];
+  const Vec3d axis = soup.points[static_cast<std::size_t>(sides[i].hi)] - lo;
+  // Each polygon's half-plane: the direction from the edge to the corner after the side.
+  std::vector<std::pair<double, std::size_t>> around;
+  Vec3d u, v;
+  for (std::size_t s = i; s < j; ++s) {
+    const Side& side = sides[s];
+    const std::size_t p = side.polygon, size = soup.polygons[p].size();
+    const std::size_t second = side.forward ? side.corner_hi : side.corner_lo;
+    const std::int64_t next = soup.polygons[p][(second - start[p] + 1) % size];
+    const Vec3d w = soup.points[static_cast<std::size_t>(next)] - lo;
+    const Vec3d across = cross(axis, cross(w, axis));  // w less its part along the axis, scaled
+    if (!(norm(across) > 0)) return {};
+    if (s == i) {
+      u = across / norm(across);
+      v = cross(axis, u) / norm(axis);
+    }
+    around.emplace_back(std::atan2(dot(across, v), dot(across, u)), s - i);
+  }
+  std::sort(around.begin(), around.end());
+  for (std::size_t k = 0; k + 1 < n; ++k)
+    if (!(around[k].first < around[k + 1].first)) return {};
+  // A polygon running lo to hi faces towards larger angles (its normal is the axis times its
+  // direction), so the solid lies between one running hi to lo and the next running lo to hi.
+  const std::size_t first = sides[i + around[0].second].forward ? 1 : 0;
+  std::vector<std::pair<std::size_t, std::size_t>> pairs;
+  for (std::size_t k = first; k < n + first; k += 2) {
+    const std::size_t a = around[k].second, b = around[(k + 1) % n].second;
+    if (sides[i + a].forward || !sides[i + b].forward) return {};
+    pairs.emplace_back(a, b);
+  }
+  return pairs;
+}
+
 /// `soup` with every vertex whose faces form several fans (parts of the surface meeting only at
-/// that point) given a copy of its own for each fan after the first, and how many vertices were
-/// split (0, with an empty soup, when none). Fans are joined across the polygons' sides shared
-/// by exactly two polygons; copies follow the soup's points, in the order their fans are met.
-PolygonSoup split_pinched_vertices(const PolygonSoup& soup, std::size_t& split) {
-  split = 0;
+/// that point) given a copy of its own for each fan after the first (an empty soup when none).
+/// Fans are joined across the polygons' sides shared by exactly two polygons, and across those
+/// of edges where parts touch by the pairs touching_pairs() makes: the vertices along such an
+/// edge are then split, one copy per pair. Copies follow the soup's points, in the order their
+/// fans are met. `pinched` counts the vertices split that are on no such edge, `touching` the
+/// edges.
+PolygonSoup split_pinched_vertices(const PolygonSoup& soup, std::size_t& pinched,
+                                   std::size_t& touching) {
+  pinched = 0;
+  touching = 0;
+  std::size_t split = 0;
+  std::vector<char> on_edge(soup.points.size(), 0);
+  bool unpaired = false;  // an edge of more than two polygons that touching_pairs() cannot pair
   std::vector<std::size_t> start;
   const std::vector<Side> sides = polygon_sides(soup, start);
   DisjointSets fans(start.back());
+  const auto join = [&](const Side& a, const Side& b) {
+    fans.unite(a.corner_lo, b.corner_lo);
+    fans.unite(a.corner_hi, b.corner_hi);
+  };
   for_each_edge(sides, [&](std::size_t i, std::size_t j) {
-    if (j - i != 2) return;
-    fans.unite(sides[i].corner_lo, sides[i + 1].corner_lo);
-    fans.unite(sides[i].corner_hi, sides[i + 1].corner_hi);
+    if (j - i == 2) {
+      join(sides[i], sides[i + 1]);
+    } else if (j - i > 2 && sides[i].lo != sides[i].hi) {
+      const auto pairs = touching_pairs(soup, sides, start, i, j);
+      for (const auto& [a, b] : pairs) join(sides[i + a], sides[i + b]);
+      unpaired = unpaired || pairs.empty();
+      ++touching;
+      on_edge[static_cast<std::size_t>(sides[i].lo)] = 1;
+      on_edge[static_cast<std::size_t>(sides[i].hi)] = 1;
+    }
   });
   // Per vertex, the fan met first keeps it; per other fan (by its root corner), a copy.
   PolygonSoup out = soup;
@@ -708,12 +772,23 @@ PolygonSoup split_pinched_vertices(const PolygonSoup& soup, std::size_t& split) 
       if (copy_of[fan] < 0) {
         copy_of[fan] = static_cast<std::int64_t>(out.points.size());
         out.points.push_back(soup.points[static_cast<std::size_t>(v)]);
-        split += was_split[static_cast<std::size_t>(v)] ? 0 : 1;
+        if (!was_split[static_cast<std::size_t>(v)]) {
+          ++split;
+          pinched += on_edge[static_cast<std::size_t>(v)] ? 0 : 1;
+        }
         was_split[static_cast<std::size_t>(v)] = 1;
       }
       v = copy_of[fan];
     }
-  if (split == 0) return {};
+  // A part touching itself along an edge that joins up at an end of it (one fan there) would
+  // leave a vertex whose fan wraps round the edge: no inward direction serves it. An edge left
+  // unpaired would be split by whatever its ends' fans make of it.
+  for (std::size_t v = 0; v < soup.points.size(); ++v)
+    if (on_edge[v] && !was_split[v]) split = 0;
+  if (split == 0 || unpaired) {
+    pinched = touching = 0;
+    return {};
+  }
   return out;
 }
 
@@ -829,8 +904,7 @@ std::vector<SurfaceProblem> find_surface_problems(const PolygonSoup& soup,
                              max);
   check_duplicates(faces, duplicate);
   ProblemCollector boundary(kBoundaryRule, "close the holes or rebuild a watertight surface", max);
-  ProblemCollector nonmanifold_edge("non-manifold edges (more than two faces on an edge)",
-                                    "remove or separate the extra faces", max);
+  ProblemCollector nonmanifold_edge(kTouchingEdgeRule, "remove or separate the extra faces", max);
   ProblemCollector orientation(kOrientationRule,
                                "orient all faces coherently (e.g. MeshLab's Re-Orient)", max);
   DisjointSets corners(faces.tris.size() * 3);  // fans around each vertex, for the vertex rule
@@ -920,11 +994,12 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
   // vertices a rounding apart made one, then loops of them along a line (T-junctions) closed by
   // slivers. Faces written twice: the repeats dropped. Then, if nothing else is left, faces
   // running against their neighbours, turned to agree with them; and pinches: parts of the
-  // surface meeting only at a vertex, that vertex split, one per fan.
+  // surface meeting only at a vertex, that vertex split, one per fan (and parts touching along
+  // an edge, split along it).
   // Zero-area faces, when nothing else is left, are flipped away (zero_area.h) once the surface
   // is oriented, kept only if that makes a valid surface.
   std::size_t seam_vertices = 0, crack_vertices = 0, crack_faces = 0, repeated_faces = 0,
-              first_repeated = 0, reoriented_faces = 0, pinched_vertices = 0;
+              first_repeated = 0, reoriented_faces = 0, pinched_vertices = 0, touching_edges = 0;
   PolygonSoup welded, near_welded, slivered, once, oriented, split;
   const PolygonSoup* mended = &input;
   bool flip = false;
@@ -942,7 +1017,7 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
     const auto left_only = [&](const char* rule) {
       return left_has(rule) && std::all_of(left.begin(), left.end(), [](const SurfaceProblem& p) {
                return p.rule == kOrientationRule || p.rule == kPinchedVertexRule ||
-                      p.rule == kZeroAreaRule;
+                      p.rule == kTouchingEdgeRule || p.rule == kZeroAreaRule;
              });
     };
     welded = weld_positions(input, seam_vertices);
@@ -965,9 +1040,9 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
       oriented = orient_faces_alike(*mended, reoriented_faces);
       take(oriented, reoriented_faces);
     }
-    if (left_only(kPinchedVertexRule)) {
-      split = split_pinched_vertices(*mended, pinched_vertices);
-      take(split, pinched_vertices);
+    if (left_only(kPinchedVertexRule) || left_only(kTouchingEdgeRule)) {
+      split = split_pinched_vertices(*mended, pinched_vertices, touching_edges);
+      take(split, pinched_vertices + touching_edges);
     }
     flip = !left.empty() && std::all_of(left.begin(), left.end(), [](const SurfaceProblem& p) {
       return p.rule == kZeroAreaRule;
@@ -995,6 +1070,7 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
   out.repeated_faces = repeated_faces;
   out.reoriented_faces = reoriented_faces;
   out.pinched_vertices = pinched_vertices;
+  out.touching_edges = touching_edges;
   out.polygons_read = soup.polygons.size();
   for (const auto& poly : soup.polygons)
     if (poly.size() > 3) ++out.triangulated_polygons;
@@ -1078,6 +1154,10 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
   note(out.pinched_vertices,
        " vertices where parts of the surface meet only at that point were split, one vertex per "
        "fan of faces: split, the surface is 2-manifold");
+  note(out.touching_edges,
+       " edges where parts of the surface touch (more than two faces on the edge, faces of the "
+       "parts alternating around it) were split, one edge per part: split, the surface is "
+       "2-manifold");
   note(out.triangulated_polygons,
        " polygons with more than three corners were split into triangles");
   note(out.dropped_unused_vertices, " vertices used by no face were dropped");

@@ -84,6 +84,12 @@ struct LoadedSurface {
   /// of faces, the copies after all other vertices (make_surface() splits them only when that,
   /// after any welding, makes a valid surface of an invalid one).
   std::size_t pinched_vertices = 0;
+  /// Edges where parts of the surface touch (more than two faces on the edge, alternating in
+  /// direction around it, as unions of solids meeting along an edge leave), split with their
+  /// vertices into one edge per pair of faces enclosing solid between them (their vertices are
+  /// not counted in `pinched_vertices`; split only when that makes a valid surface of an invalid
+  /// one).
+  std::size_t touching_edges = 0;
   /// Zero-area faces (three corners on one line), flipped away for the shell and kept on its
   /// boundary by flat tets (core/read/zero_area.h; make_surface() flips them only when that
   /// makes a valid surface of one whose only fault they are).
