@@ -564,8 +564,9 @@ class ShellSearch {
   }
 
   /// Keeps v on the surface from now on (t_v = 0, as a folded vertex) and returns true, unless
-  /// it already is. The last resort for a sector of a folded vertex whose thinnest prisms still
-  /// offend: two sectors whose directions cross overlap at any depth.
+  /// it already is. The last resort for a sector of a folded vertex, or a vertex sharing its
+  /// position with another, whose thinnest prisms still offend: two sectors whose directions
+  /// cross overlap at any depth.
   bool keep_on_surface(State& s, std::uint32_t v) {
     const auto at = std::lower_bound(folded_.begin(), folded_.end(), v);
     if (at != folded_.end() && *at == v) return false;
@@ -1500,10 +1501,27 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
         const ShellInput in = search.build(search.floor_state(), members);
         const AssembleResult floor = assemble_shell(surface, in, no_quality);
         const ShellCheckResult c = check_shell(surface, floor.mesh, check_options);
-        // Sectors of a folded vertex among its offenders go on the surface (each once), their cap
-        // points move closer to their faces (as floors drop), and the search goes on; anything
-        // else offending at the floor is a failure.
+        // Sectors of a folded vertex among its offenders go on the surface (each once), and so
+        // do vertices sharing their position with another (a pinch's or a touching edge's
+        // copies: a copy whose faces all point into a notch of the solid can only go inward
+        // into the notch across from it), their cap points move closer to their faces (as
+        // floors drop), and the search goes on; anything else offending at the floor is a
+        // failure.
         if (!c.valid()) {
+          std::vector<char> shared(n, 0);
+          {
+            std::vector<std::uint32_t> by_point(n);
+            std::iota(by_point.begin(), by_point.end(), 0u);
+            const auto less = [&](std::uint32_t a, std::uint32_t b) {
+              const Vec3d &p = surface.points[a], &q = surface.points[b];
+              return std::array<double, 3>{p[0], p[1], p[2]} <
+                     std::array<double, 3>{q[0], q[1], q[2]};
+            };
+            std::sort(by_point.begin(), by_point.end(), less);
+            for (std::size_t k = 1; k < n; ++k)
+              if (surface.points[by_point[k]] == surface.points[by_point[k - 1]])
+                shared[by_point[k]] = shared[by_point[k - 1]] = 1;
+          }
           std::vector<std::uint32_t> offending;
           for (const auto& pair : c.first_overlapping_pairs)
             for (const std::uint32_t t : pair) offending.push_back(t);
@@ -1520,7 +1538,7 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
             const std::uint32_t f = floor.mesh.source_triangle[t];
             if (search.is_cap(f)) caps.push_back(f);
             for (const std::uint32_t v : surface.triangles[f])
-              if (search.is_sector(v) && search.keep_on_surface(s, v)) {
+              if ((search.is_sector(v) || shared[v]) && search.keep_on_surface(s, v)) {
                 lowered[v] = 1;
                 progress = true;
               }

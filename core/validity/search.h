@@ -28,9 +28,10 @@
 // round find only floor elements offending (a crease sharper than the floor), their floors are
 // divided by floor_drop (at most max_floor_drops times each) and the search goes on; after that
 // the floor configuration is checked: sectors of folded vertices among its offenders (two
-// sectors whose directions cross overlap at any depth) are kept on the surface from then on,
-// each at most once, cap points among them move closer to their faces as floors do, and the
-// search goes on; otherwise the run fails, naming what it broke.
+// sectors whose directions cross overlap at any depth) and vertices sharing their position with
+// another (a pinch's copies, each with only its notch's faces) are kept on the surface from
+// then on, each at most once, cap points among them move closer to their faces as floors do,
+// and the search goes on; otherwise the run fails, naming what it broke.
 // Vertices that were never involved keep their full depth: the shell stays as thick as the
 // traces allow wherever it is already valid; the gentle shrink, applied locally until each
 // offence is gone, takes little more than needed from those that were, and once the shell is

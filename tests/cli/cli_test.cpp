@@ -515,6 +515,22 @@ TEST(CliInput, PartsTouchingAlongAnEdgeThatJoinUpAtItsEndAreRefused) {
   }
 }
 
+TEST(CliInput, NotchesMeetingAtAVertexKeepItOnTheSurface) {
+  // A 2 x 2 x 2 block less two opposite cubes: two notches meeting at the centre, a pinch. Each
+  // copy of the centre has only its notch's three faces, which point into the other notch: no
+  // depth inward serves it, so the search keeps it on the surface (the run failed with "could
+  // not make the shell valid" when only sectors of folded vertices went there).
+  TempDir dir;
+  const std::string in = dir.file("notches.obj");
+  write_surface(in, cube_cells({{0, 0, 1}, {0, 1, 0}, {0, 1, 1}, {1, 0, 0}, {1, 0, 1}, {1, 1, 0}},
+                               Vec3d{0.2, 0.4, 0.6}));
+  const LoadedSurface loaded = load_surface(in);
+  EXPECT_EQ(loaded.pinched_vertices, 1u);
+  const TetMesh shell = shell_with_notice(dir, in, "meet only at that point were split");
+  EXPECT_EQ(test::independent_shell_problems(loaded.mesh, shell), "");
+  EXPECT_GT(test::independent_coverage(loaded.mesh, shell), 0.5);
+}
+
 TEST(CliInput, FacesRunningAgainstTheirNeighboursAreTurned) {
   // The horn with every 7th face written the other way round: turned back as it is loaded, and
   // the shell is checked here against the surface read back (every face as the horn's own).
