@@ -780,11 +780,7 @@ PolygonSoup split_pinched_vertices(const PolygonSoup& soup, std::size_t& pinched
       }
       v = copy_of[fan];
     }
-  // A part touching itself along an edge that joins up at an end of it (one fan there) would
-  // leave a vertex whose fan wraps round the edge: no inward direction serves it. An edge left
-  // unpaired would be split by whatever its ends' fans make of it.
-  for (std::size_t v = 0; v < soup.points.size(); ++v)
-    if (on_edge[v] && !was_split[v]) split = 0;
+  // An edge left unpaired would be split by whatever its ends' fans make of it.
   if (split == 0 || unpaired) {
     pinched = touching = 0;
     return {};
