@@ -683,11 +683,12 @@ PolygonSoup orient_faces_alike(const PolygonSoup& soup, std::size_t& turned) {
 /// The sides [i, j) of one edge (more than two), paired up where parts of a surface touch along
 /// it (a union of solids meeting only along the edge, a solid touching itself): around the edge,
 /// polygons must alternate in direction, and each is paired with its neighbour on the side where
-/// it faces into the solid. Returns the pairs as offsets from i (empty when the polygons do not
-/// alternate or two lie in one half-plane, e.g. parts touching face to face).
+/// it faces into the solid (`across_solid`) or out of it. Returns the pairs as offsets from i
+/// (empty when the polygons do not alternate or two lie in one half-plane, e.g. parts touching
+/// face to face).
 std::vector<std::pair<std::size_t, std::size_t>> touching_pairs(
     const PolygonSoup& soup, const std::vector<Side>& sides, const std::vector<std::size_t>& start,
-    std::size_t i, std::size_t j) {
+    std::size_t i, std::size_t j, bool across_solid) {
   const std::size_t n = j - i;
   if (n % 2) return {};
   const Vec3d lo = soup.points[static_cast<std::size_t>(sides[i].lo)];
@@ -713,50 +714,88 @@ std::vector<std::pair<std::size_t, std::size_t>> touching_pairs(
   for (std::size_t k = 0; k + 1 < n; ++k)
     if (!(around[k].first < around[k + 1].first)) return {};
   // A polygon running lo to hi faces towards larger angles (its normal is the axis times its
-  // direction), so the solid lies between one running hi to lo and the next running lo to hi.
-  const std::size_t first = sides[i + around[0].second].forward ? 1 : 0;
+  // direction), so the solid lies between one running hi to lo and the next running lo to hi
+  // (pairs starting lo to hi enclose the space outside).
+  const bool pair_start = !across_solid;  // the direction of each pair's first polygon
+  const std::size_t first = sides[i + around[0].second].forward == pair_start ? 0 : 1;
   std::vector<std::pair<std::size_t, std::size_t>> pairs;
   for (std::size_t k = first; k < n + first; k += 2) {
     const std::size_t a = around[k].second, b = around[(k + 1) % n].second;
-    if (sides[i + a].forward || !sides[i + b].forward) return {};
+    if (sides[i + a].forward != pair_start || sides[i + b].forward == pair_start) return {};
     pairs.emplace_back(a, b);
   }
   return pairs;
 }
 
+/// Passes over the edges where parts touch, each pairing across the space outside those whose
+/// ends no pairing across the solid split, before the fans are left as they are.
+constexpr int kTouchingPasses = 8;
+
 /// `soup` with every vertex whose faces form several fans (parts of the surface meeting only at
 /// that point) given a copy of its own for each fan after the first (an empty soup when none).
 /// Fans are joined across the polygons' sides shared by exactly two polygons, and across those
 /// of edges where parts touch by the pairs touching_pairs() makes: the vertices along such an
-/// edge are then split, one copy per pair. Copies follow the soup's points, in the order their
-/// fans are met. `pinched` counts the vertices split that are on no such edge, `touching` the
-/// edges.
+/// edge are then split, one copy per pair. Such an edge is paired across the solid (each part
+/// keeps its own edge), unless that splits neither of its ends (its part joins up again at both,
+/// as where two cavities meet along an edge): then across the space outside. Copies follow the
+/// soup's points, in the order their fans are met. `pinched` counts the vertices split that are
+/// on no such edge, `touching` the edges.
 PolygonSoup split_pinched_vertices(const PolygonSoup& soup, std::size_t& pinched,
                                    std::size_t& touching) {
   pinched = 0;
   touching = 0;
-  std::size_t split = 0;
-  std::vector<char> on_edge(soup.points.size(), 0);
-  bool unpaired = false;  // an edge of more than two polygons that touching_pairs() cannot pair
   std::vector<std::size_t> start;
   const std::vector<Side> sides = polygon_sides(soup, start);
-  DisjointSets fans(start.back());
-  const auto join = [&](const Side& a, const Side& b) {
-    fans.unite(a.corner_lo, b.corner_lo);
-    fans.unite(a.corner_hi, b.corner_hi);
-  };
+  std::vector<std::pair<std::size_t, std::size_t>> edges;  // [i, j) of each touching edge
   for_each_edge(sides, [&](std::size_t i, std::size_t j) {
-    if (j - i == 2) {
-      join(sides[i], sides[i + 1]);
-    } else if (j - i > 2 && sides[i].lo != sides[i].hi) {
-      const auto pairs = touching_pairs(soup, sides, start, i, j);
-      for (const auto& [a, b] : pairs) join(sides[i + a], sides[i + b]);
-      unpaired = unpaired || pairs.empty();
-      ++touching;
-      on_edge[static_cast<std::size_t>(sides[i].lo)] = 1;
-      on_edge[static_cast<std::size_t>(sides[i].hi)] = 1;
-    }
+    if (j - i > 2 && sides[i].lo != sides[i].hi) edges.emplace_back(i, j);
   });
+  std::vector<char> on_edge(soup.points.size(), 0), outside(edges.size(), 0);
+  for (const auto& [i, j] : edges) {
+    on_edge[static_cast<std::size_t>(sides[i].lo)] = 1;
+    on_edge[static_cast<std::size_t>(sides[i].hi)] = 1;
+  }
+  DisjointSets fans(start.back());
+  for (int pass = 0;; ++pass) {
+    fans = DisjointSets(start.back());
+    const auto join = [&](const Side& a, const Side& b) {
+      fans.unite(a.corner_lo, b.corner_lo);
+      fans.unite(a.corner_hi, b.corner_hi);
+    };
+    for_each_edge(sides, [&](std::size_t i, std::size_t j) {
+      if (j - i == 2) join(sides[i], sides[i + 1]);
+    });
+    for (std::size_t e = 0; e < edges.size(); ++e) {
+      const auto [i, j] = edges[e];
+      const auto pairs = touching_pairs(soup, sides, start, i, j, !outside[e]);
+      if (pairs.empty()) return {};  // left to be refused, not split by whatever its ends make
+      for (const auto& [a, b] : pairs) join(sides[i + a], sides[i + b]);
+    }
+    if (edges.empty() || pass + 1 == kTouchingPasses) break;
+    // The vertices of touching edges with more than one fan.
+    std::vector<std::size_t> first_fan(soup.points.size(), SIZE_MAX);
+    std::vector<char> splits(soup.points.size(), 0);
+    for (std::size_t p = 0; p < soup.polygons.size(); ++p)
+      for (std::size_t k = 0; k < soup.polygons[p].size(); ++k) {
+        const auto v = static_cast<std::size_t>(soup.polygons[p][k]);
+        if (!on_edge[v]) continue;
+        const std::size_t fan = fans.find(start[p] + k);
+        if (first_fan[v] == SIZE_MAX) first_fan[v] = fan;
+        if (fan != first_fan[v]) splits[v] = 1;
+      }
+    bool changed = false;
+    for (std::size_t e = 0; e < edges.size(); ++e) {
+      const Side& side = sides[edges[e].first];
+      if (outside[e] || splits[static_cast<std::size_t>(side.lo)] ||
+          splits[static_cast<std::size_t>(side.hi)])
+        continue;
+      outside[e] = 1;
+      changed = true;
+    }
+    if (!changed) break;
+  }
+  touching = edges.size();
+  std::size_t split = 0;
   // Per vertex, the fan met first keeps it; per other fan (by its root corner), a copy.
   PolygonSoup out = soup;
   std::vector<std::size_t> first_fan(soup.points.size(), SIZE_MAX);
@@ -780,8 +819,7 @@ PolygonSoup split_pinched_vertices(const PolygonSoup& soup, std::size_t& pinched
       }
       v = copy_of[fan];
     }
-  // An edge left unpaired would be split by whatever its ends' fans make of it.
-  if (split == 0 || unpaired) {
+  if (split == 0) {
     pinched = touching = 0;
     return {};
   }

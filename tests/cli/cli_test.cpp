@@ -507,24 +507,29 @@ TEST(CliInput, APartTouchingItselfAlongAnEdgeIsSplitUpToWhereItJoins) {
   EXPECT_GT(test::independent_coverage(loaded.mesh, shell), 0.8);
 }
 
-TEST(CliInput, PartsTouchingAlongAnEdgeThatJoinUpAtBothEndsAreRefused) {
+TEST(CliInput, CavitiesMeetingAlongAnEdgeAreSplitAcrossTheSpaceBetween) {
   // Two cavities meeting along an edge inside a block: the solid touches itself along the edge
-  // and is one piece around both its ends, so no vertex there splits and the edge stays an edge
-  // of four faces: refused, naming it.
+  // and is one piece round both its ends, so pairing the faces across the solid splits neither
+  // end; paired across the cavities, each cavity gets an edge (and both ends) of its own.
   TempDir dir;
   std::vector<std::array<int, 3>> block;
   for (int i = 0; i < 4; ++i)
     for (int j = 0; j < 4; ++j)
       for (int k = 0; k < 3; ++k)
         if (!(k == 1 && ((i == 1 && j == 1) || (i == 2 && j == 2)))) block.push_back({i, j, k});
+  const SurfaceMesh cavities = cube_cells(block);
   const std::string in = dir.file("cavities.obj");
-  write_surface(in, cube_cells(block));
-  try {
-    load_surface(in);
-    ADD_FAILURE() << "not refused";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("1 non-manifold edges"), std::string::npos) << e.what();
-  }
+  write_surface(in, cavities);
+  const LoadedSurface loaded = load_surface(in);
+  EXPECT_EQ(loaded.touching_edges, 1u);
+  EXPECT_EQ(loaded.pinched_vertices, 0u);
+  EXPECT_EQ(loaded.stats.components, 3u);  // the block and each cavity
+  ASSERT_EQ(loaded.mesh.points.size(), cavities.points.size() + 2);
+  EXPECT_EQ(loaded.mesh.points[cavities.points.size()], (Vec3d{2, 2, 1}));
+  EXPECT_EQ(loaded.mesh.points[cavities.points.size() + 1], (Vec3d{2, 2, 2}));
+  const TetMesh shell = shell_with_notice(dir, in, "1 edges where parts of the surface touch");
+  EXPECT_EQ(test::independent_shell_problems(loaded.mesh, shell), "");
+  EXPECT_GT(test::independent_coverage(loaded.mesh, shell), 0.5);
 }
 
 TEST(CliInput, NotchesMeetingAtAVertexKeepItOnTheSurface) {
