@@ -362,29 +362,79 @@ PolygonSoup weld_positions(const PolygonSoup& soup, std::size_t& welded) {
   return out;
 }
 
+/// One side of a polygon: its ends (lo < hi), the polygon's corners there (indices into all
+/// corners, polygon by polygon), the polygon, and whether it runs from lo to hi.
+struct Side {
+  std::int64_t lo, hi;
+  std::size_t corner_lo, corner_hi;
+  std::uint32_t polygon;
+  bool forward;
+  bool operator<(const Side& o) const {
+    return std::tie(lo, hi, corner_lo) < std::tie(o.lo, o.hi, o.corner_lo);
+  }
+};
+
+/// Every side of every polygon of `soup`, sorted by its ends; `start` gets each polygon's first
+/// corner (and, last, the number of corners).
+std::vector<Side> polygon_sides(const PolygonSoup& soup, std::vector<std::size_t>& start) {
+  start.assign(soup.polygons.size() + 1, 0);
+  for (std::size_t p = 0; p < soup.polygons.size(); ++p)
+    start[p + 1] = start[p] + soup.polygons[p].size();
+  std::vector<Side> sides;
+  sides.reserve(start.back());
+  for (std::size_t p = 0; p < soup.polygons.size(); ++p) {
+    const auto& poly = soup.polygons[p];
+    const auto polygon = static_cast<std::uint32_t>(p);
+    for (std::size_t k = 0; k < poly.size(); ++k) {
+      const std::size_t l = (k + 1) % poly.size();
+      const std::size_t ck = start[p] + k, cl = start[p] + l;
+      sides.push_back(poly[k] < poly[l] ? Side{poly[k], poly[l], ck, cl, polygon, true}
+                                        : Side{poly[l], poly[k], cl, ck, polygon, false});
+    }
+  }
+  std::sort(sides.begin(), sides.end());
+  return sides;
+}
+
+/// Calls visit(a, b) for every run of sides [a, b) with the same ends, in order.
+template <class Visit>
+void for_each_edge(const std::vector<Side>& sides, const Visit& visit) {
+  for (std::size_t i = 0; i < sides.size();) {
+    std::size_t j = i;
+    while (j < sides.size() && sides[j].lo == sides[i].lo && sides[j].hi == sides[i].hi) ++j;
+    visit(i, j);
+    i = j;
+  }
+}
+
+/// The open edges of a soup (sides of one polygon) among its `sides`, each from and to as its
+/// polygon runs it, sorted.
+std::vector<std::pair<std::int64_t, std::int64_t>> open_edges(const std::vector<Side>& sides) {
+  std::vector<std::pair<std::int64_t, std::int64_t>> open;
+  for_each_edge(sides, [&](std::size_t i, std::size_t j) {
+    if (j - i != 1) return;
+    const Side& side = sides[i];
+    open.push_back(side.forward ? std::make_pair(side.lo, side.hi)
+                                : std::make_pair(side.hi, side.lo));
+  });
+  std::sort(open.begin(), open.end());
+  return open;
+}
+
 /// `soup` with each vertex of its open edges (edges of one polygon) within `tolerance` of another
 /// such vertex made one with it (a group of them with the first, at its position), and how many
 /// vertices are gone in it (0, with an empty soup, when none is): a crack where two patches were
 /// written with their shared vertices a rounding apart. A group holding both ends of an edge is
-/// left as it is (welding would collapse the edge).
+/// left as it is (welding would collapse the edge). Its indices must be valid (make_surface()
+/// calls it and close_thin_cracks() only when find_surface_problems() names open edges, which
+/// it does only then).
 PolygonSoup weld_open_seams(const PolygonSoup& soup, double tolerance, std::size_t& welded) {
   welded = 0;
-  const std::int64_t n = static_cast<std::int64_t>(soup.points.size());
-  std::vector<std::pair<std::int64_t, std::int64_t>> edges;
-  for (const auto& poly : soup.polygons)
-    for (std::size_t k = 0; k < poly.size(); ++k) {
-      const std::int64_t a = poly[k], b = poly[(k + 1) % poly.size()];
-      if (a < 0 || a >= n || b < 0 || b >= n) return {};
-      edges.push_back({std::min(a, b), std::max(a, b)});
-    }
-  std::sort(edges.begin(), edges.end());
+  std::vector<std::size_t> start;
+  const std::vector<Side> sides = polygon_sides(soup, start);
   std::vector<char> open(soup.points.size(), 0);
-  for (std::size_t i = 0; i < edges.size();) {
-    std::size_t j = i;
-    while (j < edges.size() && edges[j] == edges[i]) ++j;
-    if (j - i == 1) open[edges[i].first] = open[edges[i].second] = 1;
-    i = j;
-  }
+  for (const auto& [a, b] : open_edges(sides))
+    open[static_cast<std::size_t>(a)] = open[static_cast<std::size_t>(b)] = 1;
   // The open edges' vertices by the cell of side `tolerance` they lie in; each one against those
   // in its own and the 26 cells around.
   BBox box;
@@ -415,9 +465,10 @@ PolygonSoup weld_open_seams(const PolygonSoup& soup, double tolerance, std::size
               groups.unite(v, it->second);
         }
   std::vector<char> collapses(soup.points.size(), 0);
-  for (const auto& [a, b] : edges)
-    if (groups.find(static_cast<std::size_t>(a)) == groups.find(static_cast<std::size_t>(b)))
-      collapses[groups.find(static_cast<std::size_t>(a))] = 1;
+  for (const Side& side : sides)
+    if (groups.find(static_cast<std::size_t>(side.lo)) ==
+        groups.find(static_cast<std::size_t>(side.hi)))
+      collapses[groups.find(static_cast<std::size_t>(side.lo))] = 1;
   // Every vertex to its group's first (or itself), then the points left renumbered in order.
   std::vector<std::int64_t> index(soup.points.size());
   PolygonSoup out;
@@ -445,27 +496,11 @@ PolygonSoup weld_open_seams(const PolygonSoup& soup, double tolerance, std::size
 /// two neighbours along the line, so each is of zero area where the vertices are on the line.
 PolygonSoup close_thin_cracks(const PolygonSoup& soup, double max_width, std::size_t& added) {
   added = 0;
-  const std::int64_t n = static_cast<std::int64_t>(soup.points.size());
-  // Directed edges, each with whether it is open (its undirected edge in no other polygon).
-  std::vector<
-      std::pair<std::pair<std::int64_t, std::int64_t>, std::pair<std::int64_t, std::int64_t>>>
-      edges;  // {undirected, directed}
-  for (const auto& poly : soup.polygons)
-    for (std::size_t k = 0; k < poly.size(); ++k) {
-      const std::int64_t a = poly[k], b = poly[(k + 1) % poly.size()];
-      if (a < 0 || a >= n || b < 0 || b >= n || a == b) return {};
-      edges.push_back({{std::min(a, b), std::max(a, b)}, {a, b}});
-    }
-  std::sort(edges.begin(), edges.end());
-  // The open edges, by their first vertex.
-  std::vector<std::pair<std::int64_t, std::int64_t>> open;
-  for (std::size_t i = 0; i < edges.size();) {
-    std::size_t j = i;
-    while (j < edges.size() && edges[j].first == edges[i].first) ++j;
-    if (j - i == 1) open.push_back(edges[i].second);
-    i = j;
-  }
-  std::sort(open.begin(), open.end());
+  std::vector<std::size_t> start;
+  const std::vector<Side> sides = polygon_sides(soup, start);
+  if (std::any_of(sides.begin(), sides.end(), [](const Side& e) { return e.lo == e.hi; }))
+    return {};
+  const std::vector<std::pair<std::int64_t, std::int64_t>> open = open_edges(sides);
   std::vector<char> used(open.size(), 0);
   PolygonSoup out = soup;
   for (std::size_t first = 0; first < open.size(); ++first) {
@@ -581,51 +616,6 @@ constexpr const char* kDuplicateRule = "duplicate faces (the corners of another 
 constexpr const char* kZeroAreaRule = "degenerate (zero-area) faces";
 constexpr const char* kPinchedVertexRule = "non-manifold vertices (faces meeting only at a vertex)";
 constexpr const char* kTouchingEdgeRule = "non-manifold edges (more than two faces on an edge)";
-
-/// One side of a polygon: its ends (lo < hi), the polygon's corners there (indices into all
-/// corners, polygon by polygon), the polygon, and whether it runs from lo to hi.
-struct Side {
-  std::int64_t lo, hi;
-  std::size_t corner_lo, corner_hi;
-  std::uint32_t polygon;
-  bool forward;
-  bool operator<(const Side& o) const {
-    return std::tie(lo, hi, corner_lo) < std::tie(o.lo, o.hi, o.corner_lo);
-  }
-};
-
-/// Every side of every polygon of `soup`, sorted by its ends; `start` gets each polygon's first
-/// corner (and, last, the number of corners).
-std::vector<Side> polygon_sides(const PolygonSoup& soup, std::vector<std::size_t>& start) {
-  start.assign(soup.polygons.size() + 1, 0);
-  for (std::size_t p = 0; p < soup.polygons.size(); ++p)
-    start[p + 1] = start[p] + soup.polygons[p].size();
-  std::vector<Side> sides;
-  sides.reserve(start.back());
-  for (std::size_t p = 0; p < soup.polygons.size(); ++p) {
-    const auto& poly = soup.polygons[p];
-    const auto polygon = static_cast<std::uint32_t>(p);
-    for (std::size_t k = 0; k < poly.size(); ++k) {
-      const std::size_t l = (k + 1) % poly.size();
-      const std::size_t ck = start[p] + k, cl = start[p] + l;
-      sides.push_back(poly[k] < poly[l] ? Side{poly[k], poly[l], ck, cl, polygon, true}
-                                        : Side{poly[l], poly[k], cl, ck, polygon, false});
-    }
-  }
-  std::sort(sides.begin(), sides.end());
-  return sides;
-}
-
-/// Calls visit(a, b) for every run of sides [a, b) with the same ends, in order.
-template <class Visit>
-void for_each_edge(const std::vector<Side>& sides, const Visit& visit) {
-  for (std::size_t i = 0; i < sides.size();) {
-    std::size_t j = i;
-    while (j < sides.size() && sides[j].lo == sides[i].lo && sides[j].hi == sides[i].hi) ++j;
-    visit(i, j);
-    i = j;
-  }
-}
 
 /// `soup` with polygons turned so that the two polygons on every side shared by exactly two run
 /// along it in opposite directions, the fewer of each group of polygons joined by such sides
