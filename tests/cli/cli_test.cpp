@@ -271,6 +271,15 @@ TetMesh shell_with_notice(const TempDir& dir, const std::string& in, const std::
   return test::read_tetgen_shell(dir.file("shell.ele"));
 }
 
+/// Shells `in` (with shell_with_notice()) and checks the shell against the surface read back
+/// with the tests' independent checker, and its coverage.
+void expect_valid_shell(const TempDir& dir, const std::string& in, const LoadedSurface& loaded,
+                        const std::string& notice, double min_coverage) {
+  const TetMesh shell = shell_with_notice(dir, in, notice);
+  EXPECT_EQ(test::independent_shell_problems(loaded.mesh, shell), "");
+  EXPECT_GT(test::independent_coverage(loaded.mesh, shell), min_coverage);
+}
+
 TEST(CliRepair, SeamsWrittenTwiceAreWeldedNotRebuilt) {
   // The horn with every triangle's corners written apart, as an exporter splitting vertices
   // along seams writes them: welded with a notice, with or without --repair, and the shell is
@@ -386,9 +395,7 @@ TEST(CliInput, PartsMeetingAtOneVertexAreSplitThere) {
   EXPECT_EQ(loaded.pinched_vertices, 1u);
   EXPECT_EQ(loaded.stats.components, 2u);
 
-  const TetMesh shell = shell_with_notice(dir, in, "meet only at that point were split");
-  EXPECT_EQ(test::independent_shell_problems(loaded.mesh, shell), "");
-  EXPECT_GT(test::independent_coverage(loaded.mesh, shell), 0.8);
+  expect_valid_shell(dir, in, loaded, "meet only at that point were split", 0.8);
 }
 
 /// The boundary of a set of unit cubes (`cells`, integer corners), each square face between a
@@ -467,9 +474,7 @@ TEST(CliInput, PartsTouchingAlongAnEdgeAreSplitThere) {
       cube_of[v] = cube;
     }
   }
-  const TetMesh shell = shell_with_notice(dir, in, "1 edges where parts of the surface touch");
-  EXPECT_EQ(test::independent_shell_problems(loaded.mesh, shell), "");
-  EXPECT_GT(test::independent_coverage(loaded.mesh, shell), 0.8);
+  expect_valid_shell(dir, in, loaded, "1 edges where parts of the surface touch", 0.8);
 }
 
 TEST(CliInput, CubesTouchingAlongEdgesAndAtACornerInAnyDirection) {
@@ -483,9 +488,7 @@ TEST(CliInput, CubesTouchingAlongEdgesAndAtACornerInAnyDirection) {
   EXPECT_EQ(loaded.pinched_vertices, 0u);
   EXPECT_EQ(loaded.stats.components, 4u);
   EXPECT_EQ(loaded.mesh.points.size(), 4u * 8u);
-  const TetMesh shell = shell_with_notice(dir, in, "6 edges where parts of the surface touch");
-  EXPECT_EQ(test::independent_shell_problems(loaded.mesh, shell), "");
-  EXPECT_GT(test::independent_coverage(loaded.mesh, shell), 0.8);
+  expect_valid_shell(dir, in, loaded, "6 edges where parts of the surface touch", 0.8);
 }
 
 TEST(CliInput, APartTouchingItselfAlongAnEdgeIsSplitUpToWhereItJoins) {
@@ -502,9 +505,7 @@ TEST(CliInput, APartTouchingItselfAlongAnEdgeIsSplitUpToWhereItJoins) {
   EXPECT_EQ(loaded.stats.components, 1u);
   ASSERT_EQ(loaded.mesh.points.size(), bridge.points.size() + 1);
   EXPECT_EQ(loaded.mesh.points.back(), (Vec3d{1, 1, 0}));
-  const TetMesh shell = shell_with_notice(dir, in, "1 edges where parts of the surface touch");
-  EXPECT_EQ(test::independent_shell_problems(loaded.mesh, shell), "");
-  EXPECT_GT(test::independent_coverage(loaded.mesh, shell), 0.8);
+  expect_valid_shell(dir, in, loaded, "1 edges where parts of the surface touch", 0.8);
 }
 
 TEST(CliInput, CavitiesMeetingAlongAnEdgeAreSplitAcrossTheSpaceBetween) {
@@ -527,25 +528,21 @@ TEST(CliInput, CavitiesMeetingAlongAnEdgeAreSplitAcrossTheSpaceBetween) {
   ASSERT_EQ(loaded.mesh.points.size(), cavities.points.size() + 2);
   EXPECT_EQ(loaded.mesh.points[cavities.points.size()], (Vec3d{2, 2, 1}));
   EXPECT_EQ(loaded.mesh.points[cavities.points.size() + 1], (Vec3d{2, 2, 2}));
-  const TetMesh shell = shell_with_notice(dir, in, "1 edges where parts of the surface touch");
-  EXPECT_EQ(test::independent_shell_problems(loaded.mesh, shell), "");
-  EXPECT_GT(test::independent_coverage(loaded.mesh, shell), 0.5);
+  expect_valid_shell(dir, in, loaded, "1 edges where parts of the surface touch", 0.5);
 }
 
 TEST(CliInput, NotchesMeetingAtAVertexKeepItOnTheSurface) {
   // A 2 x 2 x 2 block less two opposite cubes: two notches meeting at the centre, a pinch. Each
   // copy of the centre has only its notch's three faces, which point into the other notch: no
-  // depth inward serves it, so the search keeps it on the surface (the run failed with "could
-  // not make the shell valid" when only sectors of folded vertices went there).
+  // depth inward serves it, so the search keeps it on the surface (else the floor configuration
+  // is invalid and the run ends in exit 3).
   TempDir dir;
   const std::string in = dir.file("notches.obj");
   write_surface(in, cube_cells({{0, 0, 1}, {0, 1, 0}, {0, 1, 1}, {1, 0, 0}, {1, 0, 1}, {1, 1, 0}},
                                Vec3d{0.2, 0.4, 0.6}));
   const LoadedSurface loaded = load_surface(in);
   EXPECT_EQ(loaded.pinched_vertices, 1u);
-  const TetMesh shell = shell_with_notice(dir, in, "meet only at that point were split");
-  EXPECT_EQ(test::independent_shell_problems(loaded.mesh, shell), "");
-  EXPECT_GT(test::independent_coverage(loaded.mesh, shell), 0.5);
+  expect_valid_shell(dir, in, loaded, "meet only at that point were split", 0.5);
 }
 
 TEST(CliInput, FacesRunningAgainstTheirNeighboursAreTurned) {
