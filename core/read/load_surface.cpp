@@ -681,8 +681,14 @@ std::vector<std::pair<std::size_t, std::size_t>> touching_pairs(
     std::size_t i, std::size_t j, bool across_solid) {
   const std::size_t n = j - i;
   if (n % 2) return {};
+  // Directions only, each scaled by its largest component first: any unit works (products of
+  // coordinates far from 1 would overflow or vanish).
+  const auto direction = [](const Vec3d& d) {
+    const double largest = std::max({std::abs(d.x), std::abs(d.y), std::abs(d.z)});
+    return largest > 0 && std::isfinite(largest) ? normalized(d / largest) : Vec3d{};
+  };
   const Vec3d lo = soup.points[static_cast<std::size_t>(sides[i].lo)];
-  const Vec3d axis = soup.points[static_cast<std::size_t>(sides[i].hi)] - lo;
+  const Vec3d axis = direction(soup.points[static_cast<std::size_t>(sides[i].hi)] - lo);
   // Each polygon's half-plane: the direction from the edge to the corner after the side.
   std::vector<std::pair<double, std::size_t>> around;
   Vec3d u, v;
@@ -691,12 +697,12 @@ std::vector<std::pair<std::size_t, std::size_t>> touching_pairs(
     const std::size_t p = side.polygon, size = soup.polygons[p].size();
     const std::size_t second = side.forward ? side.corner_hi : side.corner_lo;
     const std::int64_t next = soup.polygons[p][(second - start[p] + 1) % size];
-    const Vec3d w = soup.points[static_cast<std::size_t>(next)] - lo;
-    const Vec3d across = cross(axis, cross(w, axis));  // w less its part along the axis, scaled
+    const Vec3d w = direction(soup.points[static_cast<std::size_t>(next)] - lo);
+    const Vec3d across = w - axis * dot(w, axis);  // w less its part along the axis
     if (!(norm(across) > 0)) return {};
     if (s == i) {
-      u = across / norm(across);
-      v = cross(axis, u) / norm(axis);
+      u = normalized(across);
+      v = cross(axis, u);
     }
     around.emplace_back(std::atan2(dot(across, v), dot(across, u)), s - i);
   }

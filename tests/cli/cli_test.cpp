@@ -477,6 +477,21 @@ TEST(CliInput, PartsTouchingAlongAnEdgeAreSplitThere) {
   expect_valid_shell(dir, in, loaded, "1 edges where parts of the surface touch", 0.8);
 }
 
+TEST(CliInput, PartsTouchingAlongAnEdgeAreSplitInAnyUnit) {
+  // The faces around the edge are sorted by direction alone: two cubes 1e-300 to 1e300 across
+  // (where products of coordinates vanish or overflow) are split as at unit scale.
+  TempDir dir;
+  for (const double scale : {1e-300, std::ldexp(1.0, -700), std::ldexp(1.0, 700), 1e300}) {
+    SurfaceMesh two = cube_cells({{0, 0, 0}, {1, 1, 0}});
+    for (Vec3d& p : two.points) p = p * scale;
+    const std::string in = dir.file("scaled.obj");
+    write_surface(in, two);
+    const LoadedSurface loaded = load_surface(in);
+    EXPECT_EQ(loaded.touching_edges, 1u) << scale;
+    EXPECT_EQ(loaded.mesh.points.size(), 16u) << scale;
+  }
+}
+
 TEST(CliInput, CubesTouchingAlongEdgesAndAtACornerInAnyDirection) {
   // Four cubes of a 2 x 2 x 2 block, alternate ones, turned off the axes: each two meet along
   // an edge (6 edges), all four at the centre (on those edges: split with them).
