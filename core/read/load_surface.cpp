@@ -751,22 +751,28 @@ PolygonSoup split_pinched_vertices(const PolygonSoup& soup, std::size_t& pinched
     on_edge[static_cast<std::size_t>(sides[i].lo)] = 1;
     on_edge[static_cast<std::size_t>(sides[i].hi)] = 1;
   }
-  DisjointSets fans(start.back());
+  // Each touching edge paired both ways once: [e][0] across the solid, [e][1] outside.
+  std::vector<std::array<std::vector<std::pair<std::size_t, std::size_t>>, 2>> pairs(edges.size());
+  for (std::size_t e = 0; e < edges.size(); ++e) {
+    for (const bool across_solid : {true, false})
+      pairs[e][across_solid ? 0 : 1] =
+          touching_pairs(soup, sides, start, edges[e].first, edges[e].second, across_solid);
+    // Left to be refused, not split by whatever its ends' fans make of it.
+    if (pairs[e][0].empty() || pairs[e][1].empty()) return {};
+  }
+  const auto join = [&](DisjointSets& sets, const Side& a, const Side& b) {
+    sets.unite(a.corner_lo, b.corner_lo);
+    sets.unite(a.corner_hi, b.corner_hi);
+  };
+  DisjointSets manifold(start.back());  // across the sides of exactly two polygons
+  for_each_edge(sides, [&](std::size_t i, std::size_t j) {
+    if (j - i == 2) join(manifold, sides[i], sides[i + 1]);
+  });
+  DisjointSets fans = manifold;
   for (int pass = 0;; ++pass) {
-    fans = DisjointSets(start.back());
-    const auto join = [&](const Side& a, const Side& b) {
-      fans.unite(a.corner_lo, b.corner_lo);
-      fans.unite(a.corner_hi, b.corner_hi);
-    };
-    for_each_edge(sides, [&](std::size_t i, std::size_t j) {
-      if (j - i == 2) join(sides[i], sides[i + 1]);
-    });
-    for (std::size_t e = 0; e < edges.size(); ++e) {
-      const auto [i, j] = edges[e];
-      const auto pairs = touching_pairs(soup, sides, start, i, j, !outside[e]);
-      if (pairs.empty()) return {};  // left to be refused, not split by whatever its ends make
-      for (const auto& [a, b] : pairs) join(sides[i + a], sides[i + b]);
-    }
+    for (std::size_t e = 0; e < edges.size(); ++e)
+      for (const auto& [a, b] : pairs[e][outside[e]])
+        join(fans, sides[edges[e].first + a], sides[edges[e].first + b]);
     if (edges.empty() || pass + 1 == kTouchingPasses) break;
     // The vertices of touching edges with more than one fan.
     std::vector<std::size_t> first_fan(soup.points.size(), SIZE_MAX);
@@ -789,6 +795,7 @@ PolygonSoup split_pinched_vertices(const PolygonSoup& soup, std::size_t& pinched
       changed = true;
     }
     if (!changed) break;
+    fans = manifold;
   }
   touching = edges.size();
   std::size_t split = 0;

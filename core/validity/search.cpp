@@ -1436,6 +1436,9 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
   std::iota(seeds.begin(), seeds.end(), 0u);
   double first_offenders = 1;
   // Rounds until no element offends or the search stalls (the first search reports progress).
+  // Which vertices share their position with another: found once, the first time the floor
+  // configuration fails.
+  std::vector<char> shared;
   const auto search_rounds = [&](bool report) {
     for (;; ++out.rounds) {
       // Inverted and flat tets are local: settle them prism by prism before a round.
@@ -1508,8 +1511,8 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
         // floors drop), and the search goes on; anything else offending at the floor is a
         // failure.
         if (!c.valid()) {
-          std::vector<char> shared(n, 0);
-          {
+          if (shared.empty()) {
+            shared.assign(n, 0);
             std::vector<std::uint32_t> by_point(n);
             std::iota(by_point.begin(), by_point.end(), 0u);
             const auto less = [&](std::uint32_t a, std::uint32_t b) {

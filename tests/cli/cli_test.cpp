@@ -432,9 +432,9 @@ SurfaceMesh cube_cells(const std::vector<std::array<int, 3>>& cells, const Vec3d
         mesh.triangles.push_back({i0, i1, i2});
         mesh.triangles.push_back({i0, i2, i3});
       }
+  const double cz = std::cos(turn[0]), sz = std::sin(turn[0]), cx = std::cos(turn[1]),
+               sx = std::sin(turn[1]), cy = std::cos(turn[2]), sy = std::sin(turn[2]);
   for (Vec3d& p : mesh.points) {
-    const double cz = std::cos(turn[0]), sz = std::sin(turn[0]), cx = std::cos(turn[1]),
-                 sx = std::sin(turn[1]), cy = std::cos(turn[2]), sy = std::sin(turn[2]);
     p = Vec3d{cz * p[0] - sz * p[1], sz * p[0] + cz * p[1], p[2]};
     p = Vec3d{p[0], cx * p[1] - sx * p[2], sx * p[1] + cx * p[2]};
     p = Vec3d{cy * p[0] + sy * p[2], p[1], -sy * p[0] + cy * p[2]};
