@@ -20,6 +20,8 @@
 #include <utility>
 #include <vector>
 
+#include "assets/shapes.h"
+
 namespace vdb_shell::test {
 namespace fs = std::filesystem;
 
@@ -589,6 +591,45 @@ SurfaceMesh with_vertices_near_corners(const SurfaceMesh& mesh, std::size_t ever
     out.triangles.push_back({c, a, m});
   }
   return out;
+}
+
+SurfaceMesh folded_sliver_box(double across, double turn, Tet& flat) {
+  SurfaceMesh box = make_shape("box", 1);
+  const auto on_top = [&](std::uint32_t v) { return box.points[v].z == 0.5; };
+  const auto fold = [&]() -> bool {
+    for (std::uint32_t f = 0; f < box.triangles.size(); ++f) {
+      const Triangle t = box.triangles[f];
+      if (!std::all_of(t.begin(), t.end(), on_top)) continue;
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t a = t[k], b = t[(k + 1) % 3], c = t[(k + 2) % 3];
+        for (const Triangle& g : box.triangles) {
+          const auto at = static_cast<std::size_t>(std::find(g.begin(), g.end(), b) - g.begin());
+          if (at == 3 || g[(at + 1) % 3] != a || !on_top(g[(at + 2) % 3])) continue;
+          const std::uint32_t y = g[(at + 2) % 3];
+          const Vec3d &pa = box.points[a], &pb = box.points[b], mid = 0.5 * (pa + pb);
+          const Vec3d along = normalized(pb - pa), to_y = box.points[y] - mid;
+          const auto m = static_cast<std::uint32_t>(box.points.size());
+          box.points.push_back(mid + across * norm(pb - pa) *
+                                         normalized(to_y - dot(to_y, along) * along));
+          box.triangles[f] = {a, b, m};
+          box.triangles.push_back({b, c, m});
+          box.triangles.push_back({c, a, m});
+          flat = {a, b, y, m};
+          return true;
+        }
+      }
+    }
+    return false;
+  };
+  if (!fold())
+    throw std::logic_error("folded_sliver_box: no face of the top has a neighbour in it");
+  const double c = std::cos(turn), s = std::sin(turn), c2 = std::cos(2 * turn),
+               s2 = std::sin(2 * turn);
+  for (Vec3d& p : box.points) {
+    p = {c * p.x - s * p.y, s * p.x + c * p.y, p.z};
+    p = {p.x, c2 * p.y - s2 * p.z, s2 * p.y + c2 * p.z};
+  }
+  return box;
 }
 
 }  // namespace vdb_shell::test

@@ -132,4 +132,12 @@ SurfaceMesh with_caps(const SurfaceMesh& mesh, std::size_t every, double height,
 SurfaceMesh with_vertices_near_corners(const SurfaceMesh& mesh, std::size_t every, double distance,
                                        std::vector<InsertedVertex>& inserted);
 
+/// The unit box with a sliver folded over its neighbour: a face (a, b, c) of its top side whose
+/// neighbour (b, a, y) across ab lies in that side too becomes (a, b, m), (b, c, m), (c, a, m),
+/// m next to the middle of ab, `across` |ab| over ab towards y in the side's plane: the sliver
+/// (a, b, m) lies on (b, a, y) the wrong way round, a surface crossing itself, as rounding
+/// leaves CAD exports. Then turned by `turn` radians about z and twice that about x. `flat` is
+/// the flat tet a flip of ab would glue on: (a, b, y, m).
+SurfaceMesh folded_sliver_box(double across, double turn, Tet& flat);
+
 }  // namespace vdb_shell::test

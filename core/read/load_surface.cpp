@@ -616,6 +616,7 @@ constexpr const char* kDuplicateRule = "duplicate faces (the corners of another 
 constexpr const char* kZeroAreaRule = "degenerate (zero-area) faces";
 constexpr const char* kPinchedVertexRule = "non-manifold vertices (faces meeting only at a vertex)";
 constexpr const char* kTouchingEdgeRule = "non-manifold edges (more than two faces on an edge)";
+constexpr const char* kCrossingRule = "self-intersections (pairs of faces that cross)";
 
 /// `soup` with polygons turned so that the two polygons on every side shared by exactly two run
 /// along it in opposite directions, the fewer of each group of polygons joined by such sides
@@ -953,7 +954,7 @@ std::vector<SurfaceProblem> find_surface_problems(const PolygonSoup& soup,
 
   // Crossings only mean something on an otherwise valid surface (neighbours across an edge are
   // told apart by the edge), and cost as much as the rest together: last.
-  ProblemCollector crossing("self-intersections (pairs of faces that cross)",
+  ProblemCollector crossing(kCrossingRule,
                             "separate or re-mesh the crossing parts (for a .vdb input, a lower "
                             "--adaptivity)",
                             max);
@@ -1034,7 +1035,8 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
   // surface meeting only at a vertex, that vertex split, one per fan (and parts touching along
   // an edge, split along it).
   // Zero-area faces, when nothing else is left, are flipped away (zero_area.h) once the surface
-  // is oriented, kept only if that makes a valid surface.
+  // is oriented, kept only if that makes a valid surface; if they do not, or if crossings are
+  // all that is left, slivers are flipped with them (rounding folds them over their neighbours).
   std::size_t seam_vertices = 0, crack_vertices = 0, crack_faces = 0, repeated_faces = 0,
               first_repeated = 0, reoriented_faces = 0, pinched_vertices = 0, touching_edges = 0;
   PolygonSoup welded, near_welded, slivered, once, oriented, split;
@@ -1082,7 +1084,7 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
       take(split, pinched_vertices + touching_edges);
     }
     flip = !left.empty() && std::all_of(left.begin(), left.end(), [](const SurfaceProblem& p) {
-      return p.rule == kZeroAreaRule;
+      return p.rule == kZeroAreaRule || p.rule == kCrossingRule;
     });
     if (left.empty()) problems.clear();
     if (flip) problems = std::move(left);  // what to say if the flips do not make it valid
@@ -1145,17 +1147,52 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
         (tri_only ? "face " : "polygon ") + std::to_string(tris[turned[0]].polygon));
   }
   if (flip) {
-    std::optional<ZeroAreaFlips> flips =
-        flip_zero_area_faces(out.mesh, zero_twice_area(points_diagonal(out.mesh.points), options));
-    if (!flips) refuse();
-    if (!find_surface_problems(polygon_soup_of(flipped_surface(out.mesh, *flips)), options).empty())
-      refuse();
+    // At unit scale (the flat tets' volumes are cubes of lengths): the same faces, flipped alike.
+    int k = 0;
+    const SurfaceMesh unit = at_unit_scale(out.mesh, k);
+    const double diag = points_diagonal(unit.points),
+                 min_twice_area = zero_twice_area(diag, options);
+    const auto valid = [&](const std::optional<ZeroAreaFlips>& flips) {
+      return flips && !flips->empty() &&
+             find_surface_problems(polygon_soup_of(flipped_surface(out.mesh, *flips)), options)
+                 .empty();
+    };
+    std::optional<ZeroAreaFlips> flips = flip_zero_area_faces(unit, min_twice_area);
+    if (!valid(flips)) {
+      // Slivers with a corner where the surface crosses itself, before or after those flips.
+      SliverFlips slivers{options.sliver_fraction * diag, std::vector<char>(unit.points.size()),
+                          1e-12 * diag};
+      const auto mark = [&](const SurfaceMesh& mesh) {
+        for (const auto& pair : surface_self_intersections(mesh, kCrossingsCounted))
+          for (const std::uint32_t f : pair)
+            for (const std::uint32_t v : mesh.triangles[f]) slivers.near[v] = 1;
+      };
+      mark(unit);
+      if (flips && !flips->empty()) mark(flipped_surface(unit, *flips));
+      flips = flip_zero_area_faces(unit, min_twice_area, slivers);
+      if (!valid(flips)) refuse();
+    }
     out.zero_area = std::move(*flips);
-    out.notices.push_back(
-        std::to_string(problems[0].count) +
-        " faces have zero area (three corners on one line): the shell is built with the edge "
-        "facing each one's widest angle flipped, and each is kept on its outer boundary by a flat "
-        "tet (zero volume) glued on there");
+    const auto zero = std::find_if(problems.begin(), problems.end(),
+                                   [](const SurfaceProblem& p) { return p.rule == kZeroAreaRule; });
+    if (zero != problems.end())
+      out.notices.push_back(
+          std::to_string(zero->count) +
+          " faces have zero area (three corners on one line): the shell is built with the edge "
+          "facing each one's widest angle flipped, and each is kept on its outer boundary by a "
+          "flat tet (zero volume) glued on there");
+    if (out.zero_area.slivers) {
+      std::ostringstream within;
+      within << options.sliver_fraction;
+      out.notices.push_back(
+          std::to_string(out.zero_area.slivers) +
+          " slivers (faces with the corner facing their longest edge within " + within.str() +
+          " of the bounding box diagonal of it, as rounding leaves where a vertex sits on or "
+          "next to another face's edge) were flipped the same way" +
+          (zero != problems.end() ? "" : ", the surface crossing itself at them") +
+          ": each is kept on the outer boundary by a flat tet glued on there (the sliver, the "
+          "face across its longest edge and the two faces the flip made)");
+    }
   }
   const auto note = [&](std::size_t count, const char* what) {
     if (count) out.notices.push_back(std::to_string(count) + what);

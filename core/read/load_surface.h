@@ -42,6 +42,11 @@ struct ValidationOptions {
   /// bounding-box diagonal of it, are closed by slivers when that makes a valid surface (cracks
   /// where one side has vertices on an edge of the other: T-junctions).
   double t_junction_fraction = 1e-6;
+  /// A surface that crosses itself, or has zero-area faces that cannot be flipped away alone, is
+  /// shelled with the slivers where it crosses itself flipped too (core/read/zero_area.h,
+  /// SliverFlips): faces whose corner facing the longest edge lies within this fraction of the
+  /// bounding-box diagonal of it.
+  double sliver_fraction = 1e-4;
 };
 
 /// Facts about a valid surface (what `vdb_shell INPUT` prints).

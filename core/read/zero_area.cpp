@@ -12,7 +12,8 @@ std::uint64_t edge_key(std::uint32_t u, std::uint32_t v) { return std::uint64_t(
 
 }  // namespace
 
-std::optional<ZeroAreaFlips> flip_zero_area_faces(const SurfaceMesh& mesh, double min_twice_area) {
+std::optional<ZeroAreaFlips> flip_zero_area_faces(const SurfaceMesh& mesh, double min_twice_area,
+                                                  const SliverFlips& slivers) {
   ZeroAreaFlips out;
   out.triangles = mesh.triangles;
   std::vector<Triangle>& tris = out.triangles;
@@ -22,15 +23,8 @@ std::optional<ZeroAreaFlips> flip_zero_area_faces(const SurfaceMesh& mesh, doubl
     const Vec3d& a = mesh.points[t[0]];
     return norm(cross(mesh.points[t[1]] - a, mesh.points[t[2]] - a)) <= min_twice_area;
   };
-  std::set<std::uint32_t> pending;  // the zero-area faces, by index
-  for (std::uint32_t f = 0; f < n; ++f) {
-    const Triangle& t = tris[f];
+  for (const Triangle& t : tris)
     if (t[0] == t[1] || t[1] == t[2] || t[2] == t[0]) return std::nullopt;
-    if (is_zero(f)) pending.insert(f);
-  }
-  if (pending.empty()) return out;
-  out.face_of.resize(n);
-  std::iota(out.face_of.begin(), out.face_of.end(), 0u);
   std::unordered_map<std::uint64_t, std::uint32_t> face_at;  // directed edge -> its face
   face_at.reserve(3 * std::size_t(n));
   const auto set_edges = [&](std::uint32_t f) {
@@ -65,6 +59,47 @@ std::optional<ZeroAreaFlips> flip_zero_area_faces(const SurfaceMesh& mesh, doubl
       if (v != p.a && v != p.b) p.y = v;
     return p;
   };
+  // A sliver flips soundly when m lies next to ab, between its ends as seen from g (the two
+  // faces made then face as g does), and not above g's plane (the flat tet would be inverted).
+  // Above or below a plane: by more than slivers.tolerance, the rounding of points that lie on it.
+  const auto below = [&](const Vec3d& p, const Vec3d& o, const Vec3d& n) {
+    return dot(p - o, n) < -slivers.tolerance * norm(n);
+  };
+  const auto is_sliver = [&](std::uint32_t f) {
+    if (!(slivers.max_height > 0) ||
+        std::none_of(tris[f].begin(), tris[f].end(),
+                     [&](std::uint32_t v) { return v < slivers.near.size() && slivers.near[v]; }))
+      return false;
+    const std::optional<Flip> p = plan(f);
+    if (!p || p->y == p->m) return false;
+    const Vec3d &a = mesh.points[p->a], &b = mesh.points[p->b], &m = mesh.points[p->m],
+                &y = mesh.points[p->y];
+    const double ab = norm(b - a);
+    if (!(norm(cross(b - a, m - a)) <= slivers.max_height * ab)) return false;
+    const Vec3d n_g = cross(a - b, y - b);
+    if (!(dot(cross(a - m, y - m), n_g) > 0 && dot(cross(y - m, b - m), n_g) > 0) ||
+        below(b, m, n_g))  // m above g
+      return false;
+    // Nor may the sliver dip below the faces across its other edges: the flat tet would reach
+    // into their prisms.
+    for (const auto& [u, w, far] : {std::array<std::uint32_t, 3>{p->b, p->m, p->a},
+                                    std::array<std::uint32_t, 3>{p->m, p->a, p->b}}) {
+      const auto h = face_at.find(edge_key(w, u));
+      if (h == face_at.end()) return false;
+      const Triangle& t = tris[h->second];
+      const Vec3d& o = mesh.points[t[0]];
+      if (below(mesh.points[far], o, cross(mesh.points[t[1]] - o, mesh.points[t[2]] - o)))
+        return false;
+    }
+    return true;
+  };
+  const auto needs_flip = [&](std::uint32_t f) { return is_zero(f) || is_sliver(f); };
+  std::set<std::uint32_t> pending;  // the faces to flip away, by index
+  for (std::uint32_t f = 0; f < n; ++f)
+    if (needs_flip(f)) pending.insert(f);
+  if (pending.empty()) return out;
+  out.face_of.resize(n);
+  std::iota(out.face_of.begin(), out.face_of.end(), 0u);
   // A few flips per zero-area face at most: more means corners of many faces on one line,
   // flipped round and round.
   std::size_t budget = 4 * pending.size() + 16;
@@ -75,13 +110,14 @@ std::optional<ZeroAreaFlips> flip_zero_area_faces(const SurfaceMesh& mesh, doubl
     bool flipped = false;
     for (const bool onto_zero : {false, true}) {
       for (const std::uint32_t f : std::vector<std::uint32_t>(pending.begin(), pending.end())) {
-        if (!is_zero(f)) {
+        const bool zero = is_zero(f);
+        if (!zero && !is_sliver(f)) {
           pending.erase(f);
           continue;
         }
         const std::optional<Flip> p = plan(f);
         if (!p) return std::nullopt;
-        if (!onto_zero && is_zero(p->g)) continue;
+        if (!onto_zero && needs_flip(p->g)) continue;
         const auto [g, m, a, b, y] = *p;
         if (y == m || face_at.count(edge_key(m, y)) || face_at.count(edge_key(y, m)))
           return std::nullopt;
@@ -94,13 +130,14 @@ std::optional<ZeroAreaFlips> flip_zero_area_faces(const SurfaceMesh& mesh, doubl
         face_at.erase(edge_key(b, a));
         out.tets.push_back({a, b, y, m});
         out.tet_face.push_back(f);
+        out.slivers += !zero;
         tris[f] = new_f;
         tris[g] = new_g;
         out.face_of[f] = out.face_of[g];
         set_edges(f);
         set_edges(g);
         for (const std::uint32_t h : {f, g})
-          if (is_zero(h)) pending.insert(h);
+          if (needs_flip(h)) pending.insert(h);
         flipped = true;
         if (onto_zero) break;
       }
@@ -108,7 +145,7 @@ std::optional<ZeroAreaFlips> flip_zero_area_faces(const SurfaceMesh& mesh, doubl
     }
     if (!flipped) return std::nullopt;
     for (auto it = pending.begin(); it != pending.end();)
-      it = is_zero(*it) ? std::next(it) : pending.erase(it);
+      it = needs_flip(*it) ? std::next(it) : pending.erase(it);
   }
   return out;
 }

@@ -554,6 +554,22 @@ TEST(Pipeline, ZeroAreaFacesStayOnTheBoundaryAsFlatTets) {
     }
 }
 
+TEST(Pipeline, SliversFoldedOverTheirNeighboursStayOnTheBoundaryAsFlatTets) {
+  // The box with a sliver folded over its neighbour in its top side, axis-aligned and turned:
+  // a surface crossing itself (refused once), shelled through the surface with the sliver's
+  // long edge flipped and the sliver kept on the outer boundary by a flat tet, and checked as a
+  // shell of the input itself.
+  for (const double turn : {0.0, 0.3}) {
+    Tet flat;
+    const SurfaceMesh mesh = test::folded_sliver_box(1e-6, turn, flat);
+    const ShellResult r = build_shell(mesh, at_resolution(32), {}, "folded");
+    EXPECT_EQ(r.validity.flat_tets, 1u) << turn;
+    EXPECT_EQ(r.mesh.tets.back(), flat) << turn;
+    EXPECT_EQ(test::independent_shell_problems(mesh, r.mesh, 1, 1), "") << turn;
+    EXPECT_GT(test::independent_coverage(mesh, r.mesh), 0.95) << turn;
+  }
+}
+
 TEST(Pipeline, TJunctionCracksAreClosedBySliversOnTheBoundary) {
   // The shapes with vertices exactly on an edge of every 5th face, that face fanned from its
   // third corner and its neighbour across the edge left whole: a crack of zero width along the

@@ -1,5 +1,5 @@
-// zero_area_test.cpp — core/read/zero_area.h and make_surface()'s use of it: zero-area faces
-// flipped away, the flat tets that keep them, and the surfaces still refused.
+// zero_area_test.cpp — core/read/zero_area.h and make_surface()'s use of it: zero-area faces and
+// folded slivers flipped away, the flat tets that keep them, and the surfaces still refused.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -140,6 +140,41 @@ TEST(ZeroArea, SurfacesThatFlipsCannotMendAreStillRefused) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("degenerate (zero-area) faces"), std::string::npos)
         << e.what();
+  }
+}
+
+TEST(ZeroArea, ASliverFoldedOverItsNeighbourIsFlippedAwayWhereTheSurfaceCrossesItself) {
+  // Axis-aligned, and turned off the axes (the sliver then lies on its neighbour's plane only
+  // up to rounding, on either side).
+  for (const double turn : {0.0, 0.3})
+    for (const double across : {1e-5, 1e-6, 1e-9}) {
+      Tet flat;
+      const SurfaceMesh mesh = test::folded_sliver_box(across, turn, flat);
+      ASSERT_FALSE(test::self_intersections(mesh).empty()) << across;
+      const LoadedSurface loaded = make_surface(polygon_soup_of(mesh), "folded.obj");
+      ASSERT_EQ(loaded.zero_area.tets.size(), 1u) << across;
+      EXPECT_EQ(loaded.zero_area.slivers, 1u);
+      EXPECT_EQ(loaded.zero_area.tets[0], flat);
+      EXPECT_TRUE(test::self_intersections(flipped_surface(loaded.mesh, loaded.zero_area)).empty());
+      expect_flips_glue(loaded.mesh, loaded.zero_area, 2e-14 * 3);
+      EXPECT_TRUE(std::any_of(loaded.notices.begin(), loaded.notices.end(), [](const auto& s) {
+        return s.find("1 slivers") != std::string::npos &&
+               s.find("crossing itself at them") != std::string::npos;
+      }));
+    }
+}
+
+TEST(ZeroArea, SliversThatAFlipCannotMendLeaveTheCrossingRefused) {
+  // A sliver 1e-3 of its edge high is no rounding (above ValidationOptions::sliver_fraction of
+  // the diagonal): the surface crossing itself there is refused as before.
+  Tet flat;
+  const SurfaceMesh wide = test::folded_sliver_box(1e-3, 0.0, flat);
+  ASSERT_FALSE(test::self_intersections(wide).empty());
+  try {
+    make_surface(polygon_soup_of(wide), "wide.obj");
+    ADD_FAILURE() << "a sliver 1e-3 of its edge high was flipped";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("self-intersections"), std::string::npos) << e.what();
   }
 }
 
