@@ -30,7 +30,8 @@ constexpr double kMinMargin = 0.1;
 /// Vertices joined by edges no longer than this fraction of the longest edge at each end form
 /// a cluster (a vertex inserted on an edge next to its end, as T-junction repairs and CAD exports
 /// leave, or several). Every other member m of a cluster follows its root a (its smallest
-/// vertex) and a vertex b next to the cluster when m lies on the segment ab: its inner vertex is
+/// vertex) and a vertex b next to the cluster when m lies on the segment ab, and a's and b's
+/// first directions go in at m's faces (else m's inner vertex could go out): its inner vertex is
 /// a' + lambda (b' - a'), never a trace of its own. The sliver faces (a, m, c) then have the
 /// inner faces (a', m', c'), lambda times the inner face (a', b', c') of the face the cluster
 /// stands in for, never flipped when that one is not. An own trace would cross a's over such a
@@ -325,7 +326,7 @@ std::vector<Leaders> find_followers(const SurfaceMesh& surface, const IndexLists
         const Leaders l = along(surface, m, a, b);
         if (!(l.lambda > 0 && l.lambda <= kFollowEnd)) continue;
         const double off = norm(l.offset) / (l.lambda * std::sqrt(l2));
-        if (off <= kFollowOffLine && off < best_off) {
+        if (off <= kFollowOffLine && off < best_off && inward(m, a, b)) {
           best_off = off;
           best = l;
         }

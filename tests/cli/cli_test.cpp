@@ -335,6 +335,16 @@ TEST(CliInput, VerticesNextToAnEdgesEndAreShelled) {
   EXPECT_GT(test::independent_coverage(read_back, shell), 0.8);
 }
 
+TEST(CliInput, AVertexNextToAnEdgesEndWhereTheEdgeLeavesAFaceIsShelled) {
+  // An OpenSCAD union of a cylinder and a turned hexagonal cone (tests/data): where a cone edge
+  // leaves the cylinder's cap, its vertex there lies on the edge next to its end. Following the
+  // edge's ends, its inner vertex went out through the cap (the ends' directions point up
+  // through it): exit 3. It follows them only where their directions go in at its faces.
+  TempDir dir;
+  const std::string in = std::string(VDB_SHELL_TEST_DATA) + "/cad_union_rim.obj";
+  expect_valid_shell(dir, in, load_surface(in), "", 0.6);
+}
+
 TEST(CliInput, ANestedComponentFacingOutIsACavity) {
   // A sphere inside a sphere, both facing out (as parts are often exported): by the even-odd
   // rule the inner one bounds a cavity, so it is turned and the shell fills the space between,
