@@ -88,11 +88,17 @@ bool near_side(const SurfaceMesh& surface, const Triangle& tri, int k, Leaders& 
   return norm(l.offset) <= kCapHeight * std::sqrt(l2);
 }
 
-/// Whether every corner of face f lies within kCapHeight |ab| of the line through a and b: one
-/// of the caps (or needles) along ab, whose normal its apexes' hair-thin offsets decide.
+/// Whether every corner of face f lies within kCapHeight of the line through a and b, as a
+/// fraction of |ab| and of f's longest edge: one of the caps (or needles) along ab, whose normal
+/// its apexes' hair-thin offsets decide (a small face near the line has a normal of its own).
 bool along_base(const SurfaceMesh& surface, std::uint32_t f, std::uint32_t a, std::uint32_t b) {
   if (a == b) return false;
-  const double height = kCapHeight * distance(surface.points[a], surface.points[b]);
+  const Triangle& t = surface.triangles[f];
+  double longest = 0;
+  for (int k = 0; k < 3; ++k)
+    longest = std::max(longest, distance(surface.points[t[k]], surface.points[t[(k + 1) % 3]]));
+  const double height =
+      kCapHeight * std::min(distance(surface.points[a], surface.points[b]), longest);
   for (const std::uint32_t u : surface.triangles[f])
     if (u != a && u != b && !(norm(along(surface, u, a, b).offset) <= height)) return false;
   return true;

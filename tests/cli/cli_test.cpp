@@ -345,6 +345,18 @@ TEST(CliInput, AVertexNextToAnEdgesEndWhereTheEdgeLeavesAFaceIsShelled) {
   expect_valid_shell(dir, in, load_surface(in), "", 0.6);
 }
 
+TEST(CliInput, SmallFacesNearACapsBaseKeepTheApexsInnerVertexInside) {
+  // An OpenSCAD union of a sphere and a box whose top it pokes through (tests/data): a vertex of
+  // the ring where they meet is the apex of a cap on a long edge of the top's triangles (from
+  // the ring to a corner), and has small faces of the ring near that edge's line (within 1% of
+  // its length) but not along it.
+  // Counted as the cap's hair-thin neighbours, their normals went unchecked and the apex's
+  // inner vertex went out through them: exit 3.
+  TempDir dir;
+  const std::string in = std::string(VDB_SHELL_TEST_DATA) + "/cad_sphere_through_box_top.obj";
+  expect_valid_shell(dir, in, load_surface(in), "", 0.6);
+}
+
 TEST(CliInput, ANestedComponentFacingOutIsACavity) {
   // A sphere inside a sphere, both facing out (as parts are often exported): by the even-odd
   // rule the inner one bounds a cavity, so it is turned and the shell fills the space between,
