@@ -1515,7 +1515,8 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
         // do vertices sharing their position with another (a pinch's or a touching edge's
         // copies: a copy whose faces all point into a notch of the solid can only go inward
         // into the notch across from it), their cap points move closer to their faces (as
-        // floors drop), and the search goes on; anything else offending at the floor is a
+        // floors drop), and the search goes on; with none of those left, any vertex of an
+        // offending element goes on the surface; what offends with all its vertices there is a
         // failure.
         if (!c.valid()) {
           if (shared.empty()) {
@@ -1540,6 +1541,12 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
             offending.insert(offending.end(), list->begin(), list->end());
           std::vector<std::uint32_t> caps;
           const std::size_t first_cap = n + in.inner_points.size();
+          const auto keep = [&](std::uint32_t v, bool any) {
+            if ((any || search.is_sector(v) || shared[v]) && search.keep_on_surface(s, v)) {
+              lowered[v] = 1;
+              progress = true;
+            }
+          };
           for (const std::uint32_t p : c.first_outside_vertices) {
             const std::uint32_t f = p >= first_cap ? search.cap_face(p - first_cap) : UINT32_MAX;
             if (f != UINT32_MAX) caps.push_back(f);
@@ -1547,11 +1554,7 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
           for (const std::uint32_t t : offending) {
             const std::uint32_t f = floor.mesh.source_triangle[t];
             if (search.is_cap(f)) caps.push_back(f);
-            for (const std::uint32_t v : surface.triangles[f])
-              if ((search.is_sector(v) || shared[v]) && search.keep_on_surface(s, v)) {
-                lowered[v] = 1;
-                progress = true;
-              }
+            for (const std::uint32_t v : surface.triangles[f]) keep(v, false);
           }
           std::sort(caps.begin(), caps.end());
           caps.erase(std::unique(caps.begin(), caps.end()), caps.end());
@@ -1561,6 +1564,17 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
                 lowered[v] = 1;
                 progress = true;
               }
+          // With no sector, shared position or cap left to settle it, any vertex of an offending
+          // element goes on the surface (where the surface nearly touches itself, or slivers
+          // at their floors stay too thin, no depth serves it).
+          if (!progress) {
+            for (const std::uint32_t p : c.first_outside_vertices)
+              if (p >= n && p < first_cap)  // an inner slot's point: its surface vertices
+                for (const std::uint32_t v : members[p - n]) keep(v, true);
+            for (const std::uint32_t t : offending)
+              for (const std::uint32_t v : surface.triangles[floor.mesh.source_triangle[t]])
+                keep(v, true);
+          }
         }
         if (progress) {
           search.faces_around(lowered, seeds);

@@ -357,6 +357,26 @@ TEST(CliInput, SmallFacesNearACapsBaseKeepTheApexsInnerVertexInside) {
   expect_valid_shell(dir, in, load_surface(in), "", 0.6);
 }
 
+TEST(CliInput, VerticesNoDepthServesGoOnTheSurface) {
+  // An OpenSCAD box less a turned box that cuts it 0.0027 from its bottom edge (tests/data): a
+  // sliver 0.0027 high on a 12.6 long base along that edge, corners of a thin wall around it.
+  // No floor serves them (the sliver's prism twists, then its tets fall under the zero-volume
+  // tolerance as the floors drop) and the run ended in exit 3; the offending prisms' corners
+  // now go on the surface, at any resolution.
+  TempDir dir;
+  const std::string in = std::string(VDB_SHELL_TEST_DATA) + "/cad_thin_cut.obj";
+  const LoadedSurface loaded = load_surface(in);
+  expect_valid_shell(dir, in, loaded, "", 0.45);
+  for (const char* resolution : {"24", "128"}) {
+    const InProcess r = cli({in, "-r", resolution, "-o", dir.file("shell.ele")});
+    ASSERT_EQ(r.code, 0) << resolution << ": " << r.err;
+    EXPECT_EQ(test::independent_shell_problems(loaded.mesh,
+                                               test::read_tetgen_shell(dir.file("shell.ele"))),
+              "")
+        << resolution;
+  }
+}
+
 TEST(CliInput, ANestedComponentFacingOutIsACavity) {
   // A sphere inside a sphere, both facing out (as parts are often exported): by the even-odd
   // rule the inner one bounds a cavity, so it is turned and the shell fills the space between,
