@@ -623,13 +623,18 @@ SurfaceMesh folded_sliver_box(double across, double turn, Tet& flat) {
   };
   if (!fold())
     throw std::logic_error("folded_sliver_box: no face of the top has a neighbour in it");
-  const double c = std::cos(turn), s = std::sin(turn), c2 = std::cos(2 * turn),
-               s2 = std::sin(2 * turn);
-  for (Vec3d& p : box.points) {
-    p = {c * p.x - s * p.y, s * p.x + c * p.y, p.z};
-    p = {p.x, c2 * p.y - s2 * p.z, s2 * p.y + c2 * p.z};
-  }
+  turn_points(box.points, Vec3d{turn, 2 * turn, 0});
   return box;
+}
+
+void turn_points(std::vector<Vec3d>& points, const Vec3d& turn) {
+  const double cz = std::cos(turn[0]), sz = std::sin(turn[0]), cx = std::cos(turn[1]),
+               sx = std::sin(turn[1]), cy = std::cos(turn[2]), sy = std::sin(turn[2]);
+  for (Vec3d& p : points) {
+    p = Vec3d{cz * p[0] - sz * p[1], sz * p[0] + cz * p[1], p[2]};
+    p = Vec3d{p[0], cx * p[1] - sx * p[2], sx * p[1] + cx * p[2]};
+    p = Vec3d{cy * p[0] + sy * p[2], p[1], -sy * p[0] + cy * p[2]};
+  }
 }
 
 }  // namespace vdb_shell::test

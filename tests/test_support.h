@@ -140,4 +140,7 @@ SurfaceMesh with_vertices_near_corners(const SurfaceMesh& mesh, std::size_t ever
 /// the flat tet a flip of ab would glue on: (a, b, y, m).
 SurfaceMesh folded_sliver_box(double across, double turn, Tet& flat);
 
+/// `points` turned by the angles `turn` (radians) about z, then x, then y.
+void turn_points(std::vector<Vec3d>& points, const Vec3d& turn);
+
 }  // namespace vdb_shell::test

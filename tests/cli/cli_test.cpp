@@ -264,8 +264,9 @@ TEST(CliRepair, ACleanInputIsKeptAndGivesThePlainShell) {
 
 /// Runs the command on `in` at 48^3 into `dir`/shell.ele, expects exit 0 with `notice` on
 /// stderr, and returns the shell read back (for the caller's independent check).
-TetMesh shell_with_notice(const TempDir& dir, const std::string& in, const std::string& notice) {
-  const InProcess r = cli({in, "-r", "48", "-o", dir.file("shell.ele")});
+TetMesh shell_with_notice(const TempDir& dir, const std::string& in, const std::string& notice,
+                          const char* resolution = "48") {
+  const InProcess r = cli({in, "-r", resolution, "-o", dir.file("shell.ele")});
   EXPECT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.err.find(notice), std::string::npos) << r.err;
   return test::read_tetgen_shell(dir.file("shell.ele"));
@@ -367,14 +368,11 @@ TEST(CliInput, VerticesNoDepthServesGoOnTheSurface) {
   const std::string in = std::string(VDB_SHELL_TEST_DATA) + "/cad_thin_cut.obj";
   const LoadedSurface loaded = load_surface(in);
   expect_valid_shell(dir, in, loaded, "", 0.45);
-  for (const char* resolution : {"24", "128"}) {
-    const InProcess r = cli({in, "-r", resolution, "-o", dir.file("shell.ele")});
-    ASSERT_EQ(r.code, 0) << resolution << ": " << r.err;
-    EXPECT_EQ(test::independent_shell_problems(loaded.mesh,
-                                               test::read_tetgen_shell(dir.file("shell.ele"))),
-              "")
+  for (const char* resolution : {"24", "128"})
+    EXPECT_EQ(
+        test::independent_shell_problems(loaded.mesh, shell_with_notice(dir, in, "", resolution)),
+        "")
         << resolution;
-  }
 }
 
 TEST(CliInput, ANestedComponentFacingOutIsACavity) {
@@ -474,13 +472,7 @@ SurfaceMesh cube_cells(const std::vector<std::array<int, 3>>& cells, const Vec3d
         mesh.triangles.push_back({i0, i1, i2});
         mesh.triangles.push_back({i0, i2, i3});
       }
-  const double cz = std::cos(turn[0]), sz = std::sin(turn[0]), cx = std::cos(turn[1]),
-               sx = std::sin(turn[1]), cy = std::cos(turn[2]), sy = std::sin(turn[2]);
-  for (Vec3d& p : mesh.points) {
-    p = Vec3d{cz * p[0] - sz * p[1], sz * p[0] + cz * p[1], p[2]};
-    p = Vec3d{p[0], cx * p[1] - sx * p[2], sx * p[1] + cx * p[2]};
-    p = Vec3d{cy * p[0] + sy * p[2], p[1], -sy * p[0] + cy * p[2]};
-  }
+  test::turn_points(mesh.points, turn);
   return mesh;
 }
 
