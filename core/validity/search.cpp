@@ -574,7 +574,13 @@ class ShellSearch {
   /// it already is. The last resort for a sector of a folded vertex, or a vertex sharing its
   /// position with another, whose thinnest prisms still offend: two sectors whose directions
   /// cross overlap at any depth.
+  /// A follower goes on the surface with its leaders (its inner vertex is then its own point).
   bool keep_on_surface(State& s, std::uint32_t v) {
+    if (follows(v)) {
+      bool kept = false;
+      for_each_mover(v, [&](std::uint32_t u) { kept = keep_on_surface(s, u) || kept; });
+      return kept;
+    }
     const auto at = std::lower_bound(folded_.begin(), folded_.end(), v);
     if (at != folded_.end() && *at == v) return false;
     folded_.insert(at, v);
@@ -587,8 +593,10 @@ class ShellSearch {
   /// Folded vertices stay on the surface. A face with three folded corners keeps a prism as one
   /// tet to a cap point of its own, at the floor depth below its centroid.
   void update_caps() {
-    std::vector<char> folded(full_.size(), 0);
+    std::vector<char> folded(full_.size(), 0);  // on the surface
     for (std::uint32_t v : folded_) folded[v] = 1;
+    for (std::uint32_t v = 0; v < folded.size(); ++v)
+      if (follows(v) && folded[leaders_[v].a] && folded[leaders_[v].b]) folded[v] = 1;
     caps_ = ShellInput{};
     for (std::uint32_t f = 0; f < surface_.triangles.size(); ++f) {
       const Triangle& tri = surface_.triangles[f];
@@ -1544,6 +1552,7 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
           const auto keep = [&](std::uint32_t v, bool any) {
             if ((any || search.is_sector(v) || shared[v]) && search.keep_on_surface(s, v)) {
               lowered[v] = 1;
+              search.for_each_mover(v, [&](std::uint32_t u) { lowered[u] = 1; });
               progress = true;
             }
           };
