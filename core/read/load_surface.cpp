@@ -617,6 +617,11 @@ constexpr const char* kZeroAreaRule = "degenerate (zero-area) faces";
 constexpr const char* kPinchedVertexRule = "non-manifold vertices (faces meeting only at a vertex)";
 constexpr const char* kTouchingEdgeRule = "non-manifold edges (more than two faces on an edge)";
 constexpr const char* kCrossingRule = "self-intersections (pairs of faces that cross)";
+/// Checked last, on the surface to be shelled (oriented, zero-area faces flipped away).
+constexpr const char* kInsideContactRule =
+    "places where the surface touches itself from inside (a corner or an edge of one face on "
+    "another face, inside its edges, the solid on both sides of that face: a wall of no "
+    "thickness, which no prism under the face can keep out of)";
 
 /// `soup` with polygons turned so that the two polygons on every side shared by exactly two run
 /// along it in opposite directions, the fewer of each group of polygons joined by such sides
@@ -1192,6 +1197,37 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
           (zero != problems.end() ? "" : ", the surface crossing itself at them") +
           ": each is kept on the outer boundary by a flat tet glued on there (the sliver, the "
           "face across its longest edge and the two faces the flip made)");
+    }
+  }
+  {
+    // Only now is "inside" known: the surface oriented outward, and with the flips made.
+    int k = 0;
+    SurfaceMesh unit = at_unit_scale(out.mesh, k);
+    if (!out.zero_area.empty()) unit = flipped_surface(unit, out.zero_area);
+    // Inside a face by more than a sliver's height: a corner nearer its edge is a T-junction.
+    const double margin = options.sliver_fraction * points_diagonal(unit.points);
+    const std::vector<std::array<std::uint32_t, 2>> contacts =
+        surface_inside_contacts(unit, margin, kCrossingsCounted);
+    if (!contacts.empty()) {
+      ProblemCollector contact(kInsideContactRule,
+                               "move the parts apart, or into each other, so that the wall has a "
+                               "thickness (a cut ending exactly on a face: let it stop short of "
+                               "the face or go through it)",
+                               options.max_listed);
+      contact.problem.at_least = contacts.size() == kCrossingsCounted;
+      const SoupFaces faces{soup, {}};
+      for (const auto& [f, g] : contacts) {
+        if (contact.examples.size() >= contact.max) {
+          contact.add({});
+          continue;
+        }
+        const Vec3d x = *surface_triangles_touch_inside(unit, f, g, margin);
+        contact.add(faces.face_name(tris[f]) + " and " + faces.face_name(tris[g]) + " touch at " +
+                    fmt_point({std::ldexp(x.x, -k), std::ldexp(x.y, -k), std::ldexp(x.z, -k)}));
+      }
+      problems.clear();
+      contact.flush_into(problems);
+      refuse();
     }
   }
   const auto note = [&](std::size_t count, const char* what) {

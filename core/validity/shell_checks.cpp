@@ -235,12 +235,19 @@ ShellCheckResult check_added_tets(const SurfaceMesh& surface, const TetMesh& mes
   return check_tets(surface, mesh, options, &added);
 }
 
-std::vector<std::array<std::uint32_t, 2>> surface_self_intersections(const SurfaceMesh& surface,
-                                                                     std::size_t max_listed) {
+namespace {
+
+// The pairs of surface triangles (f, g), f < g, that `pair_found(f, g)` accepts among those
+// sharing a cell of a grid one cell larger than the surface's box on every side: at most
+// `max_listed`, by ascending f, then g. Parallel over blocks of triangles, each keeping at most
+// max_listed pairs, joined in triangle order: the same pairs for any thread count.
+template <class PairFound>
+std::vector<std::array<std::uint32_t, 2>> surface_pairs(const SurfaceMesh& surface,
+                                                        std::size_t max_listed,
+                                                        const PairFound& pair_found) {
   std::vector<std::array<std::uint32_t, 2>> out;
   const std::size_t n = surface.triangles.size();
   if (n == 0) return out;
-  // Every triangle in the cells of a grid one cell larger than the surface's box on every side.
   const BBox box = bounding_box(surface);
   const double h = triangle_cell_size(surface, box);
   BBox grid_box = box;
@@ -256,8 +263,6 @@ std::vector<std::array<std::uint32_t, 2>> surface_self_intersections(const Surfa
     for (const std::uint32_t c : face_cells[f])
       cell_faces[c].push_back(static_cast<std::uint32_t>(f));
   }
-  // Every triangle against the later ones sharing one of its cells, each pair once; blocks of
-  // triangles in parallel, each keeping at most max_listed pairs, joined in triangle order.
   const std::size_t blocks = std::min<std::size_t>(n, 256);
   std::vector<std::vector<std::array<std::uint32_t, 2>>> found(blocks);
   for_each_index(
@@ -272,7 +277,7 @@ std::vector<std::array<std::uint32_t, 2>> surface_self_intersections(const Surfa
           std::sort(later.begin(), later.end());
           later.erase(std::unique(later.begin(), later.end()), later.end());
           for (const std::uint32_t g : later) {
-            if (!surface_triangles_cross(surface, f, g)) continue;
+            if (!pair_found(f, g)) continue;
             found[b].push_back({f, g});
             if (found[b].size() >= max_listed) return;
           }
@@ -283,6 +288,87 @@ std::vector<std::array<std::uint32_t, 2>> surface_self_intersections(const Surfa
     for (const auto& pair : pairs)
       if (out.size() < max_listed) out.push_back(pair);
   return out;
+}
+
+// Where a corner or an edge of triangle `b` lies on triangle `a` at least `margin` inside its
+// edges, `b` reaching below `a`'s plane: within `tol` of the plane is on it, more is below.
+std::optional<Vec3d> touches_from_below(const std::array<Vec3d, 3>& a,
+                                        const std::array<Vec3d, 3>& b, double tol, double margin) {
+  const Vec3d n = cross(a[1] - a[0], a[2] - a[0]);
+  if (!(norm(n) > 0.0)) return std::nullopt;
+  const Vec3d unit = n / norm(n);
+  std::array<double, 3> height{};
+  bool below = false;
+  for (int k = 0; k < 3; ++k) {
+    height[k] = dot(unit, b[k] - a[0]);
+    below = below || height[k] < -tol;
+  }
+  if (!below) return std::nullopt;
+  // Inside a's edges by at least `margin`: x + t d for t in [lo, hi] (a point: d = 0).
+  const auto inside_part = [&](const Vec3d& x, const Vec3d& d) -> std::optional<Vec3d> {
+    double lo = 0.0, hi = 1.0;
+    for (int k = 0; k < 3; ++k) {
+      const Vec3d in = normalized(cross(unit, a[(k + 1) % 3] - a[k]));  // into a, in its plane
+      const double s0 = dot(in, x - a[k]) - margin, ds = dot(in, d);
+      if (ds == 0.0) {
+        if (s0 < 0.0) return std::nullopt;
+      } else if (ds > 0.0) {
+        lo = std::max(lo, -s0 / ds);
+      } else {
+        hi = std::min(hi, -s0 / ds);
+      }
+    }
+    if (lo > hi) return std::nullopt;
+    return x + d * (0.5 * (lo + hi));
+  };
+  for (int k = 0; k < 3; ++k) {
+    if (std::abs(height[k]) > tol) continue;
+    const int j = (k + 1) % 3;
+    const bool edge_on = std::abs(height[j]) <= tol;
+    if (const auto x = inside_part(b[k], edge_on ? b[j] - b[k] : Vec3d{0, 0, 0})) return x;
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+std::vector<std::array<std::uint32_t, 2>> surface_self_intersections(const SurfaceMesh& surface,
+                                                                     std::size_t max_listed) {
+  return surface_pairs(surface, max_listed, [&](std::uint32_t f, std::uint32_t g) {
+    return surface_triangles_cross(surface, f, g);
+  });
+}
+
+std::optional<Vec3d> surface_triangles_touch_inside(const SurfaceMesh& surface, std::uint32_t f,
+                                                    std::uint32_t g, double margin) {
+  const Triangle& ta = surface.triangles[f];
+  const Triangle& tb = surface.triangles[g];
+  for (const std::uint32_t u : ta)
+    if (u == tb[0] || u == tb[1] || u == tb[2]) return std::nullopt;
+  const std::array<Vec3d, 3> a = triangle_corners(surface, f);
+  const std::array<Vec3d, 3> b = triangle_corners(surface, g);
+  BBox box_a, box_b;
+  for (int k = 0; k < 3; ++k) box_a.expand(a[k]), box_b.expand(b[k]);
+  // Boxes apart by more than the tolerance (at most that of their diagonals) do not touch.
+  const double slack =
+      ShellCheckOptions{}.overlap_tolerance * std::max(box_a.diagonal(), box_b.diagonal());
+  if (box_a.lo.x > box_b.hi.x + slack || box_b.lo.x > box_a.hi.x + slack ||
+      box_a.lo.y > box_b.hi.y + slack || box_b.lo.y > box_a.hi.y + slack ||
+      box_a.lo.z > box_b.hi.z + slack || box_b.lo.z > box_a.hi.z + slack)
+    return std::nullopt;
+  const double tol = ShellCheckOptions{}.overlap_tolerance *
+                     std::max({distance(a[0], a[1]), distance(a[1], a[2]), distance(a[2], a[0]),
+                               distance(b[0], b[1]), distance(b[1], b[2]), distance(b[2], b[0])});
+  if (const auto x = touches_from_below(a, b, tol, margin)) return x;
+  return touches_from_below(b, a, tol, margin);
+}
+
+std::vector<std::array<std::uint32_t, 2>> surface_inside_contacts(const SurfaceMesh& surface,
+                                                                  double margin,
+                                                                  std::size_t max_listed) {
+  return surface_pairs(surface, max_listed, [&](std::uint32_t f, std::uint32_t g) {
+    return surface_triangles_touch_inside(surface, f, g, margin).has_value();
+  });
 }
 
 Vec3d triangles_crossing_point(const SurfaceMesh& surface, std::uint32_t f, std::uint32_t g) {

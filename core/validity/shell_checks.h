@@ -34,6 +34,7 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -178,6 +179,23 @@ class ShellChecker {
 /// ascending i, then j. Parallel over blocks of triangles; the same pairs for any thread count.
 std::vector<std::array<std::uint32_t, 2>> surface_self_intersections(const SurfaceMesh& surface,
                                                                      std::size_t max_listed);
+
+/// Where surface triangles f and g, with no corner in common, touch from inside: a corner or an
+/// edge of one lies on the other (within the crossing test's tolerance of its plane) at least
+/// `margin` world units inside its edges, and reaches below it. The solid then lies on both
+/// sides of the face there (a wall of no thickness): any prism under the face holds some of the
+/// space outside. Touching from outside (parts meeting at a point or along a line) does not
+/// count, nor does a corner on or near the other's edge (a T-junction). std::nullopt when they
+/// do not touch so.
+std::optional<Vec3d> surface_triangles_touch_inside(const SurfaceMesh& surface, std::uint32_t f,
+                                                    std::uint32_t g, double margin);
+
+/// Pairs of surface triangles (i, j), i < j, that touch from inside
+/// (surface_triangles_touch_inside()): at most `max_listed`, by ascending i, then j; the same
+/// pairs for any thread count.
+std::vector<std::array<std::uint32_t, 2>> surface_inside_contacts(const SurfaceMesh& surface,
+                                                                  double margin,
+                                                                  std::size_t max_listed);
 
 /// A point where surface triangles f and g cross (as surface_self_intersections() lists them):
 /// where an edge of one passes through the other, else (coplanar overlap) a corner of one inside

@@ -375,6 +375,23 @@ TEST(CliInput, VerticesNoDepthServesGoOnTheSurface) {
         << resolution;
 }
 
+TEST(CliInput, ACutEndingOnAFaceIsRefusedAsTouchingItselfFromInside) {
+  // An OpenSCAD box less a turned box whose top edge lies in the box's top face (tests/data): a
+  // notch touching the top from inside along a line, a wall of no thickness through which every
+  // prism under the top's faces reaches into the notch. The search ran down its floors and ended
+  // in exit 3; the surface is refused when read instead (exit 2, nothing written), naming the
+  // faces and where they touch.
+  TempDir dir;
+  const std::string in = std::string(VDB_SHELL_TEST_DATA) + "/cad_notch_touching_top.obj";
+  const InProcess refused = cli({in, "-r", "48", "-o", dir.file("refused.ele")});
+  EXPECT_EQ(refused.code, 2);
+  EXPECT_NE(refused.err.find("places where the surface touches itself from inside"),
+            std::string::npos)
+      << refused.err;
+  EXPECT_NE(refused.err.find(" touch at ("), std::string::npos) << refused.err;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("refused.ele")));
+}
+
 TEST(CliInput, ANestedComponentFacingOutIsACavity) {
   // A sphere inside a sphere, both facing out (as parts are often exported): by the even-odd
   // rule the inner one bounds a cavity, so it is turned and the shell fills the space between,

@@ -99,6 +99,76 @@ TEST(ShellChecks, SelfIntersectionsOfTheSurface) {
   EXPECT_TRUE(surface_self_intersections(two, 10).empty());
 }
 
+TEST(ShellChecks, ASurfaceTouchingItselfFromInsideIsFoundWhereItTouches) {
+  // The box (outward) with a small tet added: the tet's apex, or an edge of it, on a face of the
+  // box's top, inside its edges. Hanging below the top (a cavity touching it from inside: the
+  // wall has no thickness there) it touches from inside; standing on the top (a part touching
+  // the box from outside) it does not, nor does it a hair below the face, or where the apex sits
+  // on an edge of the top's triangles (a T-junction, within the margin).
+  const SurfaceMesh box = make_shape("box", 1);
+  const BBox bounds = bounding_box(box);
+  const double side = bounds.extent().x, h = 0.05 * side, margin = 1e-4 * side;
+  std::array<Vec3d, 3> face{};
+  for (std::size_t f = 0; f < box.triangles.size(); ++f) {
+    face = triangle_corners(box, f);
+    if (face[0].z == bounds.hi.z && face[1].z == bounds.hi.z && face[2].z == bounds.hi.z) break;
+  }
+  ASSERT_EQ(face[0].z, bounds.hi.z);
+  const Vec3d on_top = (face[0] + face[1] + face[2]) / 3.0;
+  // The midpoint of the face's edge farthest in from the top's rim (an edge of two top faces).
+  Vec3d on_edge;
+  double inset = -1;
+  for (int k = 0; k < 3; ++k) {
+    const Vec3d m = (face[k] + face[(k + 1) % 3]) * 0.5;
+    const double in =
+        std::min({m.x - bounds.lo.x, bounds.hi.x - m.x, m.y - bounds.lo.y, bounds.hi.y - m.y});
+    if (in > inset) inset = in, on_edge = m;
+  }
+  ASSERT_GT(inset, 2 * h);
+  const auto with_tet = [&](const std::array<Vec3d, 4>& corners) {
+    SurfaceMesh m = box;
+    const auto n = static_cast<std::uint32_t>(m.points.size());
+    for (const Vec3d& p : corners) m.points.push_back(p);
+    for (const Triangle& t : std::vector<Triangle>{{0, 1, 2}, {0, 3, 1}, {1, 3, 2}, {2, 3, 0}})
+      m.triangles.push_back({t[0] + n, t[1] + n, t[2] + n});
+    return m;
+  };
+  const auto apex_tet = [&](const Vec3d& apex, double down) {
+    return with_tet(
+        {apex, apex + Vec3d{h, 0, -down}, apex + Vec3d{0, h, -down}, apex + Vec3d{-h, -h, -down}});
+  };
+  const std::size_t box_faces = box.triangles.size();
+  const auto touching = [&](const SurfaceMesh& m) {
+    const auto pairs = surface_inside_contacts(m, margin, 100);
+    for (const auto& [f, g] : pairs) {
+      EXPECT_LT(f, box_faces);  // a face of the top and one of the tet
+      EXPECT_GE(g, box_faces);
+    }
+    return pairs.size();
+  };
+  // The apex hanging from the top: the three faces at the apex touch the face it lies on, there.
+  const SurfaceMesh hanging = apex_tet(on_top, h);
+  EXPECT_EQ(touching(hanging), 3u);
+  for (const auto& [f, g] : surface_inside_contacts(hanging, margin, 100)) {
+    const auto at = surface_triangles_touch_inside(hanging, f, g, margin);
+    ASSERT_TRUE(at.has_value());
+    EXPECT_LT(distance(*at, on_top), 1e-12 * side);
+  }
+  EXPECT_EQ(touching(apex_tet(on_top, -h)), 0u);                            // standing on it
+  EXPECT_EQ(touching(apex_tet(on_top - Vec3d{0, 0, 1e-6 * side}, h)), 0u);  // a wall 1e-6 thick
+  EXPECT_EQ(touching(apex_tet(on_edge, h)), 0u);
+  // An edge of the tet along the top, the other two corners below (a notch cut up to the
+  // face): the faces on that edge touch; the same edge with the tet above does not.
+  const Vec3d along = normalized(face[1] - face[0]) * h;
+  const auto edge_tet = [&](double down) {
+    const Vec3d across = normalized(cross(Vec3d{0, 0, 1}, along)) * h;
+    return with_tet({on_top - along, on_top + along, on_top + across + Vec3d{0, 0, -down},
+                     on_top - across + Vec3d{0, 0, -down}});
+  };
+  EXPECT_EQ(touching(edge_tet(h)), 4u);  // every face has a corner on the edge, one below
+  EXPECT_EQ(touching(edge_tet(-h)), 0u);
+}
+
 TEST(ShellChecks, AFaceFoldedOntoItsNeighbourCrossesIt) {
   // Two faces of the edge (0, 0, 0)-(1, 0, 0), oriented alike; the second's third corner on the
   // first's side of the edge, in its plane: a sliver turned over (as rounding leaves CAD
