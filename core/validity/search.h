@@ -76,7 +76,7 @@ struct ValidityOptions {
   double min_quality = 1e-3;
   double floor_fraction = 0.02;  ///< t_min_v = this * shortest incident edge (capped at full)
   double floor_drop = 0.25;      ///< factor on the floor of a vertex offending at its floor
-  int max_floor_drops = 4;       ///< at most this many floor drops per vertex
+  int max_floor_drops = 9;       ///< at most this many floor drops per vertex
   int max_rounds = 1000;         ///< safety net (rounds are cheap)
   /// Passes giving depth back once the shell is valid: every vertex below its traced depth half a
   /// step deeper (t / shrink^(1/2)), then a quarter, ...; the raised vertices of what then

@@ -392,6 +392,30 @@ TEST(CliInput, ACutEndingOnAFaceIsRefusedAsTouchingItselfFromInside) {
   EXPECT_FALSE(std::filesystem::exists(dir.file("refused.ele")));
 }
 
+TEST(CliInput, AWallAMillionthOfTheDiagonalThickIsShelled) {
+  // The notch of tests/data/cad_notch_touching_top.obj with its edge 1e-5 below the box's top
+  // (1e-6 of the diagonal): the top's prisms thin to that over it, their floors lowered up to 9
+  // times (with 4, as before, the run ended in exit 3).
+  TempDir dir;
+  const std::string in = std::string(VDB_SHELL_TEST_DATA) + "/cad_notch_touching_top.obj";
+  PolygonSoup soup = read_polygon_soup(in);
+  SurfaceMesh lowered;
+  for (Vec3d p : soup.points) {
+    if (p.z == 10 && p.y == 5 && p.x > 0 && p.x < 10) p.z -= 1e-5;
+    lowered.points.push_back(p);
+  }
+  EXPECT_EQ(std::count_if(lowered.points.begin(), lowered.points.end(),
+                          [](const Vec3d& p) { return p.z == 10 - 1e-5; }),
+            2);
+  for (const auto& polygon : soup.polygons)
+    lowered.triangles.push_back({static_cast<std::uint32_t>(polygon[0]),
+                                 static_cast<std::uint32_t>(polygon[1]),
+                                 static_cast<std::uint32_t>(polygon[2])});
+  const std::string thin = dir.file("thin.obj");
+  write_surface(thin, lowered);
+  expect_valid_shell(dir, thin, load_surface(thin), "", 0.2);
+}
+
 TEST(CliInput, ANestedComponentFacingOutIsACavity) {
   // A sphere inside a sphere, both facing out (as parts are often exported): by the even-odd
   // rule the inner one bounds a cavity, so it is turned and the shell fills the space between,
