@@ -606,11 +606,23 @@ class ShellSearch {
       const double edge =
           std::min({distance(p[0], p[1]), distance(p[1], p[2]), distance(p[2], p[0])});
       const auto drops = cap_drops_.find(f);
-      const double depth = floor_fraction_ * edge *
-                           std::pow(floor_drop_, drops == cap_drops_.end() ? 0 : drops->second);
+      double depth = floor_fraction_ * edge *
+                     std::pow(floor_drop_, drops == cap_drops_.end() ? 0 : drops->second);
+      const Vec3d centroid = (p[0] + p[1] + p[2]) / 3.0, normal = face_normal_area(surface_, f),
+                  down = normalized(normal);
+      // A sliver's cap (its area small for its longest edge) has no volume the checks see at
+      // that depth: deeper until its volume is 4 times their zero-volume tolerance, or as deep
+      // as the face is long.
+      const double longest =
+          std::max({distance(p[0], p[1]), distance(p[1], p[2]), distance(p[2], p[0])});
+      const auto thick_enough = [&](double d) {
+        double l = longest;
+        for (const Vec3d& corner : p) l = std::max(l, distance(corner, centroid - down * d));
+        return norm(normal) * d / 6.0 > 4.0 * ShellCheckOptions{}.zero_volume_tolerance * l * l * l;
+      };
+      while (!thick_enough(depth) && depth < longest) depth = std::min(2.0 * depth, longest);
       caps_.cap_faces.push_back(f);
-      caps_.cap_points.push_back((p[0] + p[1] + p[2]) / 3.0 -
-                                 normalized(face_normal_area(surface_, f)) * depth);
+      caps_.cap_points.push_back(centroid - down * depth);
     }
   }
 

@@ -375,6 +375,23 @@ TEST(CliInput, VerticesNoDepthServesGoOnTheSurface) {
         << resolution;
 }
 
+TEST(CliInput, ACapOnASliverIsDeepEnoughToHaveAVolume) {
+  // An OpenSCAD part (tests/data, 56 faces) with a sliver whose corners all go on the surface at
+  // the floor: its prism is one tet to a cap point at the floor depth, 0.02 of its shortest
+  // edge (4e-5), and over a face 2.7 long and 1.3e-10 in area that tet has no volume the
+  // checks see: exit 3 at every resolution. The cap point now goes deeper, until its tet has
+  // one. (Two slivers folded over their neighbours are flipped when read: the last two tets
+  // are their flat tets.)
+  TempDir dir;
+  const std::string in = std::string(VDB_SHELL_TEST_DATA) + "/cad_sliver_cap.obj";
+  const LoadedSurface loaded = load_surface(in);
+  for (const char* resolution : {"24", "48", "96"}) {
+    const TetMesh shell = shell_with_notice(dir, in, "2 slivers", resolution);
+    EXPECT_EQ(test::independent_shell_problems(loaded.mesh, shell, 0, 2), "") << resolution;
+    EXPECT_GT(test::independent_coverage(loaded.mesh, shell), 0.6) << resolution;
+  }
+}
+
 TEST(CliInput, ACutEndingOnAFaceIsRefusedAsTouchingItselfFromInside) {
   // An OpenSCAD box less a turned box whose top edge lies in the box's top face (tests/data): a
   // notch touching the top from inside along a line, a wall of no thickness through which every
