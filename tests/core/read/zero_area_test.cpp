@@ -143,6 +143,38 @@ TEST(ZeroArea, SurfacesThatFlipsCannotMendAreStillRefused) {
   }
 }
 
+TEST(ZeroArea, CrossingsLeftOnceTheFlipsAreMadeAreNamedWithTheZeroAreaFaces) {
+  // The box with a zero-area face, and a second box crossing it: crossings are not looked for
+  // while zero-area faces are there, so the refusal names what the flips leave too, rather than
+  // only the face they would have mended.
+  std::vector<test::InsertedVertex> inserted;
+  const SurfaceMesh box = test::with_caps(make_shape("box", 1), 100, 0.0, 1, inserted);
+  ASSERT_EQ(inserted.size(), 1u);
+  PolygonSoup two;
+  two.points = box.points;
+  for (const Triangle& t : box.triangles) two.polygons.push_back({t[0], t[1], t[2]});
+  const SurfaceMesh other = make_shape("box", 1);
+  const auto n = static_cast<std::int64_t>(two.points.size());
+  for (const Vec3d& p : other.points) two.points.push_back(p + Vec3d{0.3, 0.2, 0.1});
+  for (const Triangle& t : other.triangles) two.polygons.push_back({t[0] + n, t[1] + n, t[2] + n});
+  try {
+    make_surface(two, "two.obj");
+    ADD_FAILURE() << "crossing boxes were taken";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("1 degenerate (zero-area) faces"), std::string::npos) << what;
+    EXPECT_NE(what.find("self-intersections (pairs of faces that cross) once the zero-area faces "
+                        "are flipped away, first: face "),
+              std::string::npos)
+        << what;
+  }
+  // Without the second box the flip mends it.
+  PolygonSoup one;
+  one.points = box.points;
+  for (const Triangle& t : box.triangles) one.polygons.push_back({t[0], t[1], t[2]});
+  EXPECT_EQ(make_surface(one, "one.obj").zero_area.tets.size(), 1u);
+}
+
 TEST(ZeroArea, ASliverFoldedOverItsNeighbourIsFlippedAwayWhereTheSurfaceCrossesItself) {
   // Axis-aligned, and turned off the axes (the sliver then lies on its neighbour's plane only
   // up to rounding, on either side).
