@@ -347,15 +347,6 @@ std::optional<Vec3d> surface_triangles_touch_inside(const SurfaceMesh& surface, 
     if (u == tb[0] || u == tb[1] || u == tb[2]) return std::nullopt;
   const std::array<Vec3d, 3> a = triangle_corners(surface, f);
   const std::array<Vec3d, 3> b = triangle_corners(surface, g);
-  BBox box_a, box_b;
-  for (int k = 0; k < 3; ++k) box_a.expand(a[k]), box_b.expand(b[k]);
-  // Boxes apart by more than the tolerance (at most that of their diagonals) do not touch.
-  const double slack =
-      ShellCheckOptions{}.overlap_tolerance * std::max(box_a.diagonal(), box_b.diagonal());
-  if (box_a.lo.x > box_b.hi.x + slack || box_b.lo.x > box_a.hi.x + slack ||
-      box_a.lo.y > box_b.hi.y + slack || box_b.lo.y > box_a.hi.y + slack ||
-      box_a.lo.z > box_b.hi.z + slack || box_b.lo.z > box_a.hi.z + slack)
-    return std::nullopt;
   const double tol = ShellCheckOptions{}.overlap_tolerance *
                      std::max({distance(a[0], a[1]), distance(a[1], a[2]), distance(a[2], a[0]),
                                distance(b[0], b[1]), distance(b[1], b[2]), distance(b[2], b[0])});
@@ -366,7 +357,23 @@ std::optional<Vec3d> surface_triangles_touch_inside(const SurfaceMesh& surface, 
 std::vector<std::array<std::uint32_t, 2>> surface_inside_contacts(const SurfaceMesh& surface,
                                                                   double margin,
                                                                   std::size_t max_listed) {
+  // Faces whose boxes are apart by more than the tolerance (at most that of the boxes'
+  // diagonals) do not touch: most pairs of a grid cell.
+  std::vector<BBox> boxes(surface.triangles.size());
+  std::vector<double> slacks(boxes.size());
+  for_each_index(boxes.size(), [&](std::size_t f) {
+    for (const Vec3d& p : triangle_corners(surface, f)) boxes[f].expand(p);
+    slacks[f] = ShellCheckOptions{}.overlap_tolerance * boxes[f].diagonal();
+  });
   return surface_pairs(surface, max_listed, [&](std::uint32_t f, std::uint32_t g) {
+    const Triangle &ta = surface.triangles[f], &tb = surface.triangles[g];
+    for (const std::uint32_t u : ta)
+      if (u == tb[0] || u == tb[1] || u == tb[2]) return false;
+    const BBox &a = boxes[f], &b = boxes[g];
+    const double slack = std::max(slacks[f], slacks[g]);
+    if (a.lo.x > b.hi.x + slack || b.lo.x > a.hi.x + slack || a.lo.y > b.hi.y + slack ||
+        b.lo.y > a.hi.y + slack || a.lo.z > b.hi.z + slack || b.lo.z > a.hi.z + slack)
+      return false;
     return surface_triangles_touch_inside(surface, f, g, margin).has_value();
   });
 }
