@@ -590,8 +590,9 @@ class ShellSearch {
     return true;
   }
 
-  /// Folded vertices stay on the surface. A face with three folded corners keeps a prism as one
-  /// tet to a cap point of its own, at the floor depth below its centroid.
+  /// Folded vertices stay on the surface (and followers of two folded leaders with them). A face
+  /// with three corners there keeps a prism as one tet to a cap point of its own, at the floor
+  /// depth below its centroid.
   void update_caps() {
     std::vector<char> folded(full_.size(), 0);  // on the surface
     for (std::uint32_t v : folded_) folded[v] = 1;
@@ -611,8 +612,8 @@ class ShellSearch {
       const Vec3d centroid = (p[0] + p[1] + p[2]) / 3.0, normal = face_normal_area(surface_, f),
                   down = normalized(normal);
       // A sliver's cap (its area small for its longest edge) has no volume the checks see at
-      // that depth: deeper until its volume is 4 times their zero-volume tolerance, or as deep
-      // as the face is long.
+      // that depth: twice as deep until its volume exceeds 4 times their zero-volume tolerance,
+      // at most as deep as the face is long.
       const double longest =
           std::max({distance(p[0], p[1]), distance(p[1], p[2]), distance(p[2], p[0])});
       const auto thick_enough = [&](double d) {
