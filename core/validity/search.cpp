@@ -1420,6 +1420,19 @@ void give_back(const ShellSearch& search, const SurfaceMesh& surface, State& s,
   }
 }
 
+/// assemble_shell() of the search's own input: should it refuse that input, the search broke an
+/// invariant of its own (a bug, exit 3), not the user's file.
+AssembleResult assemble_own(const SurfaceMesh& surface, const ShellInput& input,
+                            const AssembleOptions& options) {
+  try {
+    return assemble_shell(surface, input, options);
+  } catch (const InputError& e) {
+    throw InternalError(std::string("the validity search built a shell it cannot assemble "
+                                    "(please report this input): ") +
+                        e.what());
+  }
+}
+
 }  // namespace
 
 ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& traces,
@@ -1474,7 +1487,7 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
           search.settle_volumes(s, seeds, options.shrink, check_options.zero_volume_tolerance,
                                 options.min_quality, lowered);
       out.input = search.build(s, members);
-      out.shell = assemble_shell(surface, out.input, no_quality);
+      out.shell = assemble_own(surface, out.input, no_quality);
       out.checks = check(out.shell.mesh);
       if (out.checks.valid() || out.rounds >= options.max_rounds) break;
       const PointSlots slot_of(surface, out.input, out.shell.mesh);
@@ -1530,7 +1543,7 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
       if (!progress) {
         // The floors are as low as they go: the floor configuration itself must be invalid.
         const ShellInput in = search.build(search.floor_state(), members);
-        const AssembleResult floor = assemble_shell(surface, in, no_quality);
+        const AssembleResult floor = assemble_own(surface, in, no_quality);
         const ShellCheckResult c = check_shell(surface, floor.mesh, check_options);
         // Sectors of a folded vertex among its offenders go on the surface (each once), and so
         // do vertices sharing their position with another (a pinch's or a touching edge's
@@ -1616,7 +1629,7 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
       search, surface, s, options, check_options.zero_volume_tolerance, members, out, seeds,
       [&] {
         out.input = search.build(s, members);
-        out.shell = assemble_shell(surface, out.input, no_quality);
+        out.shell = assemble_own(surface, out.input, no_quality);
       },
       check);
   // Inner vertices at one place but not one vertex step back (each along its own trace, apart;
@@ -1649,7 +1662,7 @@ ValidShell make_valid_shell(const SurfaceMesh& surface, const TraceResult& trace
 
   out.seconds = seconds_since(t0);
   monitor.milestone(0.9);  // the search is done; the final full check is the rest
-  out.shell = assemble_shell(surface, out.input, out.assemble);  // with quality, for the report
+  out.shell = assemble_own(surface, out.input, out.assemble);  // with quality, for the report
   if (before_final_check && out.checks.valid()) before_final_check(out, *checker);
   checker.reset();
 
