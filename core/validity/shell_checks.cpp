@@ -14,8 +14,10 @@
 #include <numeric>
 #include <sstream>
 #include <string>
+#include <utility>
 
 #include "core/base/errors.h"
+#include "core/base/index_lists.h"
 #include "core/base/parallel.h"
 #include "core/base/timer.h"
 #include "core/validity/check_steps.h"
@@ -254,36 +256,49 @@ std::vector<std::array<std::uint32_t, 2>> surface_pairs(const SurfaceMesh& surfa
   grid_box.expand(box.lo - Vec3d{h, h, h});
   grid_box.expand(box.hi + Vec3d{h, h, h});
   const TetGrid grid(grid_box, h);
-  std::vector<std::vector<std::uint32_t>> cell_faces(grid.num_cells());
-  std::vector<std::vector<std::uint32_t>> face_cells(n);
-  for (std::size_t f = 0; f < n; ++f) {
-    const std::array<Vec3d, 3> t = triangle_corners(surface, f);
-    face_cells[f].resize(grid.cells_of_triangle(t, nullptr));
-    grid.cells_of_triangle(t, face_cells[f].data());
-    for (const std::uint32_t c : face_cells[f])
-      cell_faces[c].push_back(static_cast<std::uint32_t>(f));
-  }
+  // The cells of each face, and the faces of each cell (ascending).
+  IndexLists face_cells, cell_faces;
+  lists_in_blocks(
+      n, 4096,
+      [&](std::size_t f, std::vector<std::uint32_t>& cells) {
+        const std::array<Vec3d, 3> t = triangle_corners(surface, f);
+        const std::size_t at = cells.size();
+        cells.resize(at + grid.cells_of_triangle(t, nullptr));
+        grid.cells_of_triangle(t, cells.data() + at);
+      },
+      face_cells.start, face_cells.items);
+  invert_lists(
+      n,
+      [&](std::size_t f) {
+        const IndexLists::Range cells = face_cells[f];
+        return std::make_pair(cells.begin(), cells.end());
+      },
+      grid.num_cells(), cell_faces.start, cell_faces.items);
+  // Each face against the later ones sharing one of its cells, each pair once (a face met
+  // again in another cell is marked with the face it was met for); chunks of blocks in
+  // parallel, each block keeping at most max_listed pairs.
   const std::size_t blocks = std::min<std::size_t>(n, 256);
   std::vector<std::vector<std::array<std::uint32_t, 2>>> found(blocks);
-  for_each_index(
+  for_each_chunk(
       blocks,
-      [&](std::size_t b) {
-        std::vector<std::uint32_t> later;
-        for (auto f = static_cast<std::uint32_t>(b * n / blocks); f < (b + 1) * n / blocks; ++f) {
-          later.clear();
-          for (const std::uint32_t c : face_cells[f])
-            for (const std::uint32_t g : cell_faces[c])
-              if (g > f) later.push_back(g);
-          std::sort(later.begin(), later.end());
-          later.erase(std::unique(later.begin(), later.end()), later.end());
-          for (const std::uint32_t g : later) {
-            if (!pair_found(f, g)) continue;
-            found[b].push_back({f, g});
-            if (found[b].size() >= max_listed) return;
+      [&](std::size_t first, std::size_t last) {
+        std::vector<std::uint32_t> met(n, UINT32_MAX), pairs;
+        for (std::size_t b = first; b != last; ++b)
+          for (auto f = static_cast<std::uint32_t>(b * n / blocks);
+               f < (b + 1) * n / blocks && found[b].size() < max_listed; ++f) {
+            pairs.clear();
+            for (const std::uint32_t c : face_cells[f]) {
+              const IndexLists::Range faces = cell_faces[c];
+              for (const std::uint32_t* g = std::upper_bound(faces.begin(), faces.end(), f);
+                   g != faces.end(); ++g)
+                if (std::exchange(met[*g], f) != f && pair_found(f, *g)) pairs.push_back(*g);
+            }
+            std::sort(pairs.begin(), pairs.end());
+            for (const std::uint32_t g : pairs)
+              if (found[b].size() < max_listed) found[b].push_back({f, g});
           }
-        }
       },
-      2);
+      16);
   for (const auto& pairs : found)
     for (const auto& pair : pairs)
       if (out.size() < max_listed) out.push_back(pair);
