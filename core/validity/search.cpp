@@ -621,7 +621,8 @@ class ShellSearch {
         for (const Vec3d& corner : p) l = std::max(l, distance(corner, centroid - down * d));
         return norm(normal) * d / 6.0 > 4.0 * ShellCheckOptions{}.zero_volume_tolerance * l * l * l;
       };
-      while (!thick_enough(depth) && depth < longest) depth = std::min(2.0 * depth, longest);
+      while (depth > 0 && depth < longest && !thick_enough(depth))
+        depth = std::min(2.0 * depth, longest);
       caps_.cap_faces.push_back(f);
       caps_.cap_points.push_back(centroid - down * depth);
     }
