@@ -9,6 +9,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <fstream>
 #include <string>
 
@@ -16,9 +17,20 @@
 #include "core/read/load_surface.h"
 #include "vdb_ops/fields.h"
 
-extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  static const std::string path =
+namespace {
+
+// The file each input is written to, one per process, removed when the fuzzer exits.
+struct InputFile {
+  std::string path =
       "/tmp/vdb_shell_vdb_fuzz_" + std::to_string(static_cast<long>(getpid())) + ".vdb";
+  ~InputFile() { std::remove(path.c_str()); }
+};
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  static const InputFile file;
+  const std::string& path = file.path;
   {
     std::ofstream out(path, std::ios::binary | std::ios::trunc);
     out.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
