@@ -1157,23 +1157,23 @@ LoadedSurface make_surface(const PolygonSoup& input, const std::string& source,
     const SurfaceMesh unit = at_unit_scale(out.mesh, k);
     const double diag = points_diagonal(unit.points),
                  min_twice_area = zero_twice_area(diag, options);
-    const auto problems_of = [&](const ZeroAreaFlips& flips) {
-      return find_surface_problems(polygon_soup_of(flipped_surface(out.mesh, flips)), options);
-    };
+    std::vector<SurfaceProblem> after_flips;  // what the flips valid() tried last leave wrong
     const auto valid = [&](const std::optional<ZeroAreaFlips>& flips) {
-      return flips && !flips->empty() && problems_of(*flips).empty();
+      if (!flips || flips->empty()) return false;
+      after_flips =
+          find_surface_problems(polygon_soup_of(flipped_surface(out.mesh, *flips)), options);
+      return after_flips.empty();
     };
     std::optional<ZeroAreaFlips> flips = flip_zero_area_faces(unit, min_twice_area);
     if (!valid(flips)) {
       // What the zero-area flips alone leave (crossings are not looked for while such faces
       // are there) is said too, should the surface be refused.
-      if (flips && !flips->empty())
-        for (SurfaceProblem& left : problems_of(*flips))
-          if (std::none_of(problems.begin(), problems.end(),
-                           [&](const SurfaceProblem& p) { return p.rule == left.rule; })) {
-            left.rule += " once the zero-area faces are flipped away";
-            problems.push_back(std::move(left));
-          }
+      for (SurfaceProblem& p : after_flips)
+        if (std::none_of(problems.begin(), problems.end(),
+                         [&](const SurfaceProblem& q) { return q.rule == p.rule; })) {
+          p.rule += " once the zero-area faces are flipped away";
+          problems.push_back(std::move(p));
+        }
       // Slivers with a corner where the surface crosses itself, before or after those flips.
       SliverFlips slivers{options.sliver_fraction * diag, std::vector<char>(unit.points.size()),
                           1e-12 * diag};

@@ -604,18 +604,18 @@ class ShellSearch {
       if (!folded[tri[0]] || !folded[tri[1]] || !folded[tri[2]]) continue;
       const std::array<Vec3d, 3> p = {surface_.points[tri[0]], surface_.points[tri[1]],
                                       surface_.points[tri[2]]};
-      const double edge =
-          std::min({distance(p[0], p[1]), distance(p[1], p[2]), distance(p[2], p[0])});
+      const std::array<double, 3> edges{distance(p[0], p[1]), distance(p[1], p[2]),
+                                        distance(p[2], p[0])};
+      const double shortest = std::min({edges[0], edges[1], edges[2]}),
+                   longest = std::max({edges[0], edges[1], edges[2]});
       const auto drops = cap_drops_.find(f);
-      double depth = floor_fraction_ * edge *
+      double depth = floor_fraction_ * shortest *
                      std::pow(floor_drop_, drops == cap_drops_.end() ? 0 : drops->second);
       const Vec3d centroid = (p[0] + p[1] + p[2]) / 3.0, normal = face_normal_area(surface_, f),
                   down = normalized(normal);
       // A sliver's cap (its area small for its longest edge) has no volume the checks see at
       // that depth: twice as deep until its volume exceeds 4 times their zero-volume tolerance,
       // at most as deep as the face is long.
-      const double longest =
-          std::max({distance(p[0], p[1]), distance(p[1], p[2]), distance(p[2], p[0])});
       const auto thick_enough = [&](double d) {
         double l = longest;
         for (const Vec3d& corner : p) l = std::max(l, distance(corner, centroid - down * d));

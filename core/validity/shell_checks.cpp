@@ -305,6 +305,12 @@ std::vector<std::array<std::uint32_t, 2>> surface_pairs(const SurfaceMesh& surfa
   return out;
 }
 
+bool share_a_corner(const Triangle& a, const Triangle& b) {
+  for (const std::uint32_t u : a)
+    if (u == b[0] || u == b[1] || u == b[2]) return true;
+  return false;
+}
+
 // Where a corner or an edge of triangle `b` lies on triangle `a` at least `margin` inside its
 // edges, `b` reaching below `a`'s plane: within `tol` of the plane is on it, more is below.
 std::optional<Vec3d> touches_from_below(const std::array<Vec3d, 3>& a,
@@ -356,10 +362,7 @@ std::vector<std::array<std::uint32_t, 2>> surface_self_intersections(const Surfa
 
 std::optional<Vec3d> surface_triangles_touch_inside(const SurfaceMesh& surface, std::uint32_t f,
                                                     std::uint32_t g, double margin) {
-  const Triangle& ta = surface.triangles[f];
-  const Triangle& tb = surface.triangles[g];
-  for (const std::uint32_t u : ta)
-    if (u == tb[0] || u == tb[1] || u == tb[2]) return std::nullopt;
+  if (share_a_corner(surface.triangles[f], surface.triangles[g])) return std::nullopt;
   const std::array<Vec3d, 3> a = triangle_corners(surface, f);
   const std::array<Vec3d, 3> b = triangle_corners(surface, g);
   const double tol = ShellCheckOptions{}.overlap_tolerance *
@@ -372,24 +375,18 @@ std::optional<Vec3d> surface_triangles_touch_inside(const SurfaceMesh& surface, 
 std::vector<std::array<std::uint32_t, 2>> surface_inside_contacts(const SurfaceMesh& surface,
                                                                   double margin,
                                                                   std::size_t max_listed) {
-  // Faces whose boxes are apart by more than the tolerance (at most that of the boxes'
-  // diagonals) do not touch: most pairs of a grid cell.
+  // Faces whose boxes, grown by the tolerance (at most that of the box's diagonal), do not
+  // meet do not touch: most pairs of a grid cell.
   std::vector<BBox> boxes(surface.triangles.size());
-  std::vector<double> slacks(boxes.size());
   for_each_index(boxes.size(), [&](std::size_t f) {
     for (const Vec3d& p : triangle_corners(surface, f)) boxes[f].expand(p);
-    slacks[f] = ShellCheckOptions{}.overlap_tolerance * boxes[f].diagonal();
+    const double slack = ShellCheckOptions{}.overlap_tolerance * boxes[f].diagonal();
+    boxes[f] = {boxes[f].lo - Vec3d{slack, slack, slack}, boxes[f].hi + Vec3d{slack, slack, slack}};
   });
   return surface_pairs(surface, max_listed, [&](std::uint32_t f, std::uint32_t g) {
-    const Triangle &ta = surface.triangles[f], &tb = surface.triangles[g];
-    for (const std::uint32_t u : ta)
-      if (u == tb[0] || u == tb[1] || u == tb[2]) return false;
-    const BBox &a = boxes[f], &b = boxes[g];
-    const double slack = std::max(slacks[f], slacks[g]);
-    if (a.lo.x > b.hi.x + slack || b.lo.x > a.hi.x + slack || a.lo.y > b.hi.y + slack ||
-        b.lo.y > a.hi.y + slack || a.lo.z > b.hi.z + slack || b.lo.z > a.hi.z + slack)
-      return false;
-    return surface_triangles_touch_inside(surface, f, g, margin).has_value();
+    return !share_a_corner(surface.triangles[f], surface.triangles[g]) &&
+           boxes_overlap(boxes[f], boxes[g]) &&
+           surface_triangles_touch_inside(surface, f, g, margin).has_value();
   });
 }
 
