@@ -58,6 +58,9 @@ constexpr double kSliverShape = 0.1;
 /// corner is within kFlatFloors floors of the surface (ShellSearch::below_curable_quality()).
 constexpr double kFlatEdges = 8;
 constexpr double kFlatFloors = 4;
+/// Steps back a needle below --min-quality must reach it within, to be stepped back (a vertex
+/// keeps 0.85^8 = 27% of its depth after 8 steps; ShellSearch::reaches_by_steps()).
+constexpr int kCurableSteps = 8;
 
 /// The vertices of a follower's inner vertex: lambda along a' -> b' (a.k.a. m' above), moved
 /// by `offset`, its own offset from the segment ab.
@@ -937,21 +940,26 @@ class ShellSearch {
   }
 
   /// Whether tet `t` of `p`, prism of `s` (corners `c`), is below `quality` and stepping back may
-  /// bring it there. A needle (traces converging, or deep for their triangle) gains quality fast as
-  /// its inner corners step back. A flat tet, whose longest edge is kFlatEdges times its deepest
-  /// inner corner's depth or more (a coarse CAD face over a thin part), can stay far below
-  /// `quality` however far its corners step back: stepped back all the same, it thinned the
-  /// shell around it down to the floors for a quality it could not reach. So a flat tet steps
-  /// back only where the gain of one step of every inner corner along its trace, kept up,
-  /// reaches `quality` before the deepest corner's floor; or where every inner corner is within
-  /// kFlatFloors floors of the surface (a step costs little depth there, and the quality of so
-  /// flat a tet hangs on its corners' small offsets); or where a corner follows (its leaders'
-  /// steps are not modelled here). Otherwise it is left as it is: its volume is positive.
+  /// bring it there. A needle (traces converging, or deep for their triangle) mostly gains quality
+  /// fast as its inner corners step back, but not always: where its quality levels off below
+  /// `quality` (a cone's side faces over its axis, a spike's tip), stepping it back to its floor
+  /// thinned the shell for nothing. So a needle steps back only where kCurableSteps steps, taken
+  /// as settle_volumes() takes them, bring it to `quality` (reaches_by_steps()). A flat tet, whose
+  /// longest edge is kFlatEdges times its deepest inner corner's depth or more (a coarse CAD face
+  /// over a thin part), can stay far below `quality` however far its corners step back: stepped
+  /// back all the same, it thinned the shell around it down to the floors for a quality it could
+  /// not reach. So a flat tet steps back only where the gain of one step of every inner corner
+  /// along its trace, kept up, reaches `quality` before the deepest corner's floor. Either steps
+  /// back where every inner corner is within kFlatFloors floors of the surface (a step costs
+  /// little depth there, and the quality of so flat a tet hangs on its corners' small offsets),
+  /// or where a corner follows (its leaders' steps are not modelled here). Otherwise it is left as
+  /// it is: its volume is positive.
   bool below_curable_quality(const State& s, const LocalPrism& p, const Tet& t,
                              std::array<Vec3d, 4> c, double quality) const {
     const double q = tet_quality(c[0], c[1], c[2], c[3]);
     if (!(q < quality)) return false;
     if (p.cap || !(q > 0)) return true;
+    const std::array<Vec3d, 4> now = c;
     const auto n = static_cast<std::uint32_t>(full_.size());
     const Triangle& tri = surface_.triangles[p.face];
     double longest = 0, deepest = 0, steps = 0;
@@ -977,9 +985,70 @@ class ShellSearch {
       const auto level = static_cast<int>(at / 3);
       c[i] = level == layers_ ? inner : sv + (inner - sv) * layer_at_[level];
     }
-    if (near_floor || longest < kFlatEdges * deepest) return true;
+    if (near_floor) return true;
+    if (longest < kFlatEdges * deepest) return reaches_by_steps(s, p, t, now, quality);
     const double stepped = tet_quality(c[0], c[1], c[2], c[3]);
     return stepped > q && std::log(quality / q) <= (steps + 1) * std::log(stepped / q);
+  }
+
+  /// Whether tet `t` of `p`, prism of `s` (corners `c`, no corner following), reaches `quality`
+  /// within kCurableSteps steps back of its inner corners' vertices taken as settle_volumes()
+  /// takes them: the deepest movable one each time (deepest_corner()), a welded group leaving
+  /// its weld whole first (step_back()). Only this tet is modelled: the other prisms' steps are
+  /// not.
+  bool reaches_by_steps(const State& s, const LocalPrism& p, const Tet& t, std::array<Vec3d, 4> c,
+                        double quality) const {
+    const auto n = static_cast<std::uint32_t>(full_.size());
+    const Triangle& tri = surface_.triangles[p.face];
+    struct Corner {
+      std::uint32_t v;
+      double t;
+      bool welded, moved;
+    };
+    std::array<Corner, 4> vertices{};
+    std::array<int, 4> vertex_of{-1, -1, -1, -1};
+    std::array<std::ptrdiff_t, 4> slot{};
+    int count = 0;
+    for (int i = 0; i < 4; ++i) {
+      if (t[i] < n) continue;
+      slot[i] = std::find(p.ids.begin(), p.ids.end(), t[i]) - p.ids.begin();
+      const std::uint32_t v = tri[slot[i] % 3];
+      int j = 0;
+      while (j < count && vertices[j].v != v) ++j;
+      if (j == count) vertices[count++] = {v, s.t[v], s.welded[v] != 0, false};
+      vertex_of[i] = j;
+    }
+    for (int step = 0; step < kCurableSteps; ++step) {
+      int deepest = -1;
+      double deepest_depth = 0;
+      for (int j = 0; j < count; ++j) {
+        const Corner& x = vertices[j];
+        const double d =
+            x.welded ? group_depth_[start_.input.inner_id[x.v]] : (x.t > floor_[x.v] ? x.t : 0.0);
+        if (d > deepest_depth) deepest_depth = d, deepest = j;
+      }
+      if (deepest < 0) return false;  // every corner at its floor
+      Corner& x = vertices[deepest];
+      if (x.welded) {
+        const std::uint32_t group = start_.input.inner_id[x.v];
+        for (int j = 0; j < count; ++j)
+          if (vertices[j].welded && start_.input.inner_id[vertices[j].v] == group)
+            vertices[j].welded = false, vertices[j].moved = true;
+      } else {
+        x.t = std::max(floor_[x.v], x.t * shrink_);
+        x.moved = true;
+      }
+      for (int i = 0; i < 4; ++i) {
+        if (vertex_of[i] < 0 || !vertices[vertex_of[i]].moved) continue;
+        const Corner& y = vertices[vertex_of[i]];
+        const Vec3d inner = position(y.v, y.t);
+        const Vec3d& sv = surface_.points[y.v];
+        const auto level = static_cast<int>(slot[i] / 3);
+        c[i] = level == layers_ ? inner : sv + (inner - sv) * layer_at_[level];
+      }
+      if (tet_quality(c[0], c[1], c[2], c[3]) >= quality) return true;
+    }
+    return false;
   }
 
   /// The share of --min-quality a prism on face f is settled to: 1, or on a sliver face its shape
