@@ -671,11 +671,18 @@ class ShellSearch {
   /// floor, 0 at the floor or on the surface; a follower's, its deeper leader's.
   double depth(const State& s, std::uint32_t v) const {
     double d = 0;
-    for_each_mover(v, [&](std::uint32_t u) {
-      d = std::max(d, s.welded[u] ? group_depth_[start_.input.inner_id[u]]
-                                  : (s.t[u] > floor_[u] ? s.t[u] : 0.0));
-    });
+    for_each_mover(v, [&](std::uint32_t u) { d = std::max(d, own_depth(u, s.t[u], s.welded[u])); });
     return d;
+  }
+  /// depth() of a vertex that moves itself, at t, welded or not.
+  double own_depth(std::uint32_t v, double t, bool welded) const {
+    return welded ? group_depth_[start_.input.inner_id[v]] : (t > floor_[v] ? t : 0.0);
+  }
+  /// The point at `level` of v's column (layers_: the inner vertex) with v's inner vertex at
+  /// `inner`.
+  Vec3d column_point(std::uint32_t v, const Vec3d& inner, int level) const {
+    const Vec3d& sv = surface_.points[v];
+    return level == layers_ ? inner : sv + (inner - sv) * layer_at_[level];
   }
 
   /// Vertices kept on the surface (t_v = 0): those whose incident faces admit no common inward
@@ -955,11 +962,10 @@ class ShellSearch {
   /// or where a corner follows (its leaders' steps are not modelled here). Otherwise it is left as
   /// it is: its volume is positive.
   bool below_curable_quality(const State& s, const LocalPrism& p, const Tet& t,
-                             std::array<Vec3d, 4> c, double quality) const {
+                             const std::array<Vec3d, 4>& c, double quality) const {
     const double q = tet_quality(c[0], c[1], c[2], c[3]);
     if (!(q < quality)) return false;
     if (p.cap || !(q > 0)) return true;
-    const std::array<Vec3d, 4> now = c;
     const auto n = static_cast<std::uint32_t>(full_.size());
     const Triangle& tri = surface_.triangles[p.face];
     double longest = 0, deepest = 0, steps = 0;
@@ -978,16 +984,22 @@ class ShellSearch {
       if (follows(v)) return true;
       const double arc = s.t[v];
       if (arc > floor_[v]) steps = std::max(steps, std::log(floor_[v] / arc) / std::log(shrink_));
-      // One step back: a welded vertex leaves its weld for its own trace, any other goes to
-      // max(floor, shrink * t), as step_back() moves it; a layer point moves with it.
-      const Vec3d inner =
-          s.welded[v] ? position(v, arc) : position(v, std::max(floor_[v], arc * shrink_));
-      const auto level = static_cast<int>(at / 3);
-      c[i] = level == layers_ ? inner : sv + (inner - sv) * layer_at_[level];
     }
     if (near_floor) return true;
-    if (longest < kFlatEdges * deepest) return reaches_by_steps(s, p, t, now, quality);
-    const double stepped = tet_quality(c[0], c[1], c[2], c[3]);
+    if (longest < kFlatEdges * deepest) return reaches_by_steps(s, p, t, c, quality);
+    // One step back: a welded vertex leaves its weld for its own trace, any other goes to
+    // max(floor, shrink * t), as step_back() moves it; a layer point moves with it.
+    std::array<Vec3d, 4> next = c;
+    for (int i = 0; i < 4; ++i) {
+      if (t[i] < n) continue;
+      const auto at = std::find(p.ids.begin(), p.ids.end(), t[i]) - p.ids.begin();
+      const std::uint32_t v = tri[at % 3];
+      const double arc = s.t[v];
+      const Vec3d inner =
+          s.welded[v] ? position(v, arc) : position(v, std::max(floor_[v], arc * shrink_));
+      next[i] = column_point(v, inner, static_cast<int>(at / 3));
+    }
+    const double stepped = tet_quality(next[0], next[1], next[2], next[3]);
     return stepped > q && std::log(quality / q) <= (steps + 1) * std::log(stepped / q);
   }
 
@@ -1023,8 +1035,7 @@ class ShellSearch {
       double deepest_depth = 0;
       for (int j = 0; j < count; ++j) {
         const Corner& x = vertices[j];
-        const double d =
-            x.welded ? group_depth_[start_.input.inner_id[x.v]] : (x.t > floor_[x.v] ? x.t : 0.0);
+        const double d = own_depth(x.v, x.t, x.welded);
         if (d > deepest_depth) deepest_depth = d, deepest = j;
       }
       if (deepest < 0) return false;  // every corner at its floor
@@ -1041,10 +1052,7 @@ class ShellSearch {
       for (int i = 0; i < 4; ++i) {
         if (vertex_of[i] < 0 || !vertices[vertex_of[i]].moved) continue;
         const Corner& y = vertices[vertex_of[i]];
-        const Vec3d inner = position(y.v, y.t);
-        const Vec3d& sv = surface_.points[y.v];
-        const auto level = static_cast<int>(slot[i] / 3);
-        c[i] = level == layers_ ? inner : sv + (inner - sv) * layer_at_[level];
+        c[i] = column_point(y.v, position(y.v, y.t), static_cast<int>(slot[i] / 3));
       }
       if (tet_quality(c[0], c[1], c[2], c[3]) >= quality) return true;
     }
