@@ -968,6 +968,7 @@ class ShellSearch {
     if (p.cap || !(q > 0)) return true;
     const auto n = static_cast<std::uint32_t>(full_.size());
     const Triangle& tri = surface_.triangles[p.face];
+    if (on_welded_side_quad(s, p, t)) return true;
     double longest = 0, deepest = 0, steps = 0;
     for (int i = 0; i < 4; ++i)
       for (int j = i + 1; j < 4; ++j) longest = std::max(longest, distance(c[i], c[j]));
@@ -1001,6 +1002,28 @@ class ShellSearch {
     }
     const double stepped = tet_quality(next[0], next[1], next[2], next[3]);
     return stepped > q && std::log(quality / q) <= (steps + 1) * std::log(stepped / q);
+  }
+
+  /// Whether tet `t` of `p`, prism of `s`, is the four corners of a side quad of a prism whose weld
+  /// makes the quad's inner corner one point with the third column's. Where the quad is flat (its
+  /// traces in one plane, as on a mirror plane) no step along the traces gives that tet a volume,
+  /// but leaving the weld, the first step back, splits the prism into three tets again.
+  bool on_welded_side_quad(const State& s, const LocalPrism& p, const Tet& t) const {
+    const Triangle& tri = surface_.triangles[p.face];
+    const std::uint32_t* inner = p.ids.data() + 3 * layers_;
+    for (int c = 0; c < 3; ++c) {  // c: the column the quad leaves out
+      const int a = (c + 1) % 3, b = (c + 2) % 3;
+      if (inner[a] == inner[b]) continue;
+      const bool weld_a = inner[a] == inner[c] && s.welded[tri[a]] && s.welded[tri[c]];
+      const bool weld_b = inner[b] == inner[c] && s.welded[tri[b]] && s.welded[tri[c]];
+      if (!weld_a && !weld_b) continue;
+      const std::array<std::uint32_t, 4> quad{p.ids[a], p.ids[b], inner[a], inner[b]};
+      if (std::all_of(t.begin(), t.end(), [&](std::uint32_t id) {
+            return std::find(quad.begin(), quad.end(), id) != quad.end();
+          }))
+        return true;
+    }
+    return false;
   }
 
   /// Whether tet `t` of `p`, prism of `s` (corners `c`, no corner following), reaches `quality`
