@@ -1004,12 +1004,14 @@ class ShellSearch {
     return stepped > q && std::log(quality / q) <= (steps + 1) * std::log(stepped / q);
   }
 
-  /// Whether tet `t` of `p`, prism of `s`, is the four corners of a side quad of a prism whose weld
-  /// makes the quad's inner corner one point with the third column's. Where the quad is flat (its
-  /// traces in one plane, as on a mirror plane) no step along the traces gives that tet a volume,
-  /// but leaving the weld, the first step back, splits the prism into three tets again.
+  /// Whether tet `t` of `p`, prism of `s`, is the four corners of a side quad of the innermost
+  /// layer of a prism whose weld makes the quad's inner corner one point with the third column's.
+  /// Where the quad is flat (its traces in one plane, as on a mirror plane) no step along the
+  /// traces gives that tet a volume, but leaving the weld, the first step back, splits the layer
+  /// into three tets again.
   bool on_welded_side_quad(const State& s, const LocalPrism& p, const Tet& t) const {
     const Triangle& tri = surface_.triangles[p.face];
+    const std::uint32_t* outside = p.ids.data() + 3 * (layers_ - 1);  // the layer outside inner
     const std::uint32_t* inner = p.ids.data() + 3 * layers_;
     for (int c = 0; c < 3; ++c) {  // c: the column the quad leaves out
       const int a = (c + 1) % 3, b = (c + 2) % 3;
@@ -1017,7 +1019,7 @@ class ShellSearch {
       const bool weld_a = inner[a] == inner[c] && s.welded[tri[a]] && s.welded[tri[c]];
       const bool weld_b = inner[b] == inner[c] && s.welded[tri[b]] && s.welded[tri[c]];
       if (!weld_a && !weld_b) continue;
-      const std::array<std::uint32_t, 4> quad{p.ids[a], p.ids[b], inner[a], inner[b]};
+      const std::array<std::uint32_t, 4> quad{outside[a], outside[b], inner[a], inner[b]};
       if (std::all_of(t.begin(), t.end(), [&](std::uint32_t id) {
             return std::find(quad.begin(), quad.end(), id) != quad.end();
           }))
