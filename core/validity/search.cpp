@@ -1007,8 +1007,8 @@ class ShellSearch {
   /// Whether tet `t` of `p`, prism of `s`, is the four corners of a side quad of the innermost
   /// layer of a prism whose weld makes the quad's inner corner one point with the third column's.
   /// Where the quad is flat (its traces in one plane, as on a mirror plane) no step along the
-  /// traces gives that tet a volume, but leaving the weld, the first step back, splits the layer
-  /// into three tets again.
+  /// traces gives that tet a volume, but the welded group's step back, leaving its weld, splits
+  /// the layer into three tets again.
   bool on_welded_side_quad(const State& s, const LocalPrism& p, const Tet& t) const {
     const Triangle& tri = surface_.triangles[p.face];
     const std::uint32_t* outside = p.ids.data() + 3 * (layers_ - 1);  // the layer outside inner
