@@ -50,6 +50,38 @@ bool same_cycle(const std::array<std::uint32_t, 3>& x, const Triangle& y) {
   return false;
 }
 
+// The face of tet `t` (corners `v`) opposite corner k.
+FaceRecord face_record(const Tet& v, std::uint32_t t, int k) {
+  const int* f = kTetOutwardFace[k];
+  return {sorted3(v[f[0]], v[f[1]], v[f[2]]), t, static_cast<std::uint8_t>(k)};
+}
+
+// The records of `faces` (sorted) on the vertex triple `key`.
+struct RecordRange {
+  FaceRecords::const_iterator begin, end;
+  std::size_t size() const { return static_cast<std::size_t>(end - begin); }
+};
+RecordRange records_of(const FaceRecords& faces, const std::array<std::uint32_t, 3>& key) {
+  const FaceRecord probe{key, 0, 0};
+  const auto lo = std::lower_bound(faces.begin(), faces.end(), probe);
+  auto hi = lo;
+  while (hi != faces.end() && hi->same_key(probe)) ++hi;
+  return {lo, hi};
+}
+
+enum BoundaryVerdict : std::uint8_t { kBoundaryFace, kMissing, kShared, kMisoriented };
+
+// Input triangle `tri` among the sorted faces of `mesh`: one face, outward as the triangle turns.
+BoundaryVerdict boundary_verdict(const Triangle& tri, const FaceRecords& faces,
+                                 const TetMesh& mesh) {
+  const RecordRange r = records_of(faces, sorted3(tri[0], tri[1], tri[2]));
+  if (r.size() == 0) return kMissing;
+  if (r.size() > 1) return kShared;
+  const Tet& v = mesh.tets[r.begin->tet];
+  const int* k = kTetOutwardFace[r.begin->face];
+  return same_cycle({v[k[0]], v[k[1]], v[k[2]]}, tri) ? kBoundaryFace : kMisoriented;
+}
+
 }  // namespace
 
 void list_item(std::vector<std::uint32_t>& list, std::size_t max_listed, std::size_t item) {
@@ -98,54 +130,117 @@ void count_volumes(const TetMesh& mesh, const ShellCheckOptions& options,
 
 void check_boundary_faces(const SurfaceMesh& surface, const TetMesh& mesh,
                           const ShellCheckOptions& options, ShellCheckResult& result) {
-  const FaceRecords faces = sorted_tet_faces(mesh);
-  // A face is non-manifold where more than two tets share it: counted at its first record.
-  result.nonmanifold_faces += reduce_in_blocks(
-      faces.size(), std::size_t{0},
-      [&](std::size_t i) -> std::size_t {
-        return (i == 0 || !faces[i].same_key(faces[i - 1])) && i + 2 < faces.size() &&
-               faces[i + 2].same_key(faces[i]);
-      },
-      std::plus<>());
-  // Per input triangle, in parallel; counted and listed in triangle order after.
-  enum Verdict : std::uint8_t { kBoundaryFace, kMissing, kShared, kMisoriented };
-  const std::size_t n_triangles = surface.triangles.size();
-  std::vector<std::uint8_t> verdict(n_triangles, kBoundaryFace);
-  for_each_chunk(
-      n_triangles,
-      [&](std::size_t begin, std::size_t end) {
-        for (std::size_t f = begin; f != end; ++f) {
-          const Triangle& tri = surface.triangles[f];
-          const FaceRecord probe{sorted3(tri[0], tri[1], tri[2]), 0, 0};
-          const auto lo = std::lower_bound(faces.begin(), faces.end(), probe);
-          auto hi = lo;
-          while (hi != faces.end() && hi->same_key(probe)) ++hi;
-          const std::ptrdiff_t count = hi - lo;
-          if (count == 0) {
-            verdict[f] = kMissing;
-          } else if (count > 1) {
-            verdict[f] = kShared;
-          } else {
-            const Tet& v = mesh.tets[lo->tet];
-            const int* k = kTetOutwardFace[lo->face];
-            if (!same_cycle({v[k[0]], v[k[1]], v[k[2]]}, tri)) verdict[f] = kMisoriented;
-          }
-        }
-      },
-      1024);
+  BoundaryFaces(surface).check(mesh, options, result);
+}
+
+void BoundaryFaces::check(const TetMesh& mesh, const ShellCheckOptions& options,
+                          ShellCheckResult& result) {
+  std::vector<std::uint32_t> changed;
+  if (mesh.tets.size() == tets_.size() && verdict_.size() == surface_.triangles.size()) {
+    std::vector<std::uint8_t> differs(tets_.size(), 0);
+    for_each_chunk(
+        tets_.size(),
+        [&](std::size_t begin, std::size_t end) {
+          for (std::size_t t = begin; t != end; ++t) differs[t] = mesh.tets[t] != tets_[t];
+        },
+        1 << 14);
+    for (std::size_t t = 0; t < differs.size(); ++t)
+      if (differs[t]) changed.push_back(static_cast<std::uint32_t>(t));
+    if (changed.size() * kRebuildShare <= tets_.size())
+      update(mesh, changed);
+    else
+      rebuild(mesh);
+  } else {
+    rebuild(mesh);
+  }
+  result.nonmanifold_faces += nonmanifold_;
   const std::size_t max_listed = options.max_listed;
-  for (std::size_t f = 0; f < n_triangles; ++f) {
-    if (verdict[f] == kMissing) {
+  for (std::size_t f = 0; f < verdict_.size(); ++f) {
+    if (verdict_[f] == kMissing) {
       ++result.missing_triangles;
       list_item(result.first_missing_triangles, max_listed, f);
-    } else if (verdict[f] == kShared) {
+    } else if (verdict_[f] == kShared) {
       ++result.shared_triangles;
       list_item(result.first_shared_triangles, max_listed, f);
-    } else if (verdict[f] == kMisoriented) {
+    } else if (verdict_[f] == kMisoriented) {
       ++result.misoriented_triangles;
       list_item(result.first_misoriented_triangles, max_listed, f);
     }
   }
+}
+
+void BoundaryFaces::rebuild(const TetMesh& mesh) {
+  tets_ = mesh.tets;
+  faces_ = sorted_tet_faces(mesh);
+  nonmanifold_ = reduce_in_blocks(
+      faces_.size(), std::size_t{0},
+      [&](std::size_t i) -> std::size_t {
+        return (i == 0 || !faces_[i].same_key(faces_[i - 1])) && i + 2 < faces_.size() &&
+               faces_[i + 2].same_key(faces_[i]);
+      },
+      std::plus<>());
+  verdict_.resize(surface_.triangles.size());
+  for_each_chunk(
+      verdict_.size(),
+      [&](std::size_t begin, std::size_t end) {
+        for (std::size_t f = begin; f != end; ++f)
+          verdict_[f] = boundary_verdict(surface_.triangles[f], faces_, mesh);
+      },
+      1024);
+}
+
+void BoundaryFaces::update(const TetMesh& mesh, const std::vector<std::uint32_t>& changed) {
+  if (changed.empty()) return;
+  if (triangle_keys_.empty()) {  // the surface's: built once
+    triangle_keys_.reserve(surface_.triangles.size());
+    for (std::uint32_t f = 0; f < surface_.triangles.size(); ++f) {
+      const Triangle& t = surface_.triangles[f];
+      triangle_keys_.emplace_back(sorted3(t[0], t[1], t[2]), f);
+    }
+    std::sort(triangle_keys_.begin(), triangle_keys_.end());
+  }
+  // The faces the changed tets had and have, and the vertex triples of either.
+  FaceRecords removed(4 * changed.size()), added(4 * changed.size());
+  for (std::size_t i = 0; i < changed.size(); ++i) {
+    const std::uint32_t t = changed[i];
+    for (int k = 0; k < 4; ++k) {
+      removed[4 * i + k] = face_record(tets_[t], t, k);
+      added[4 * i + k] = face_record(mesh.tets[t], t, k);
+    }
+    tets_[t] = mesh.tets[t];
+  }
+  parallel_sort(removed.begin(), removed.end());
+  parallel_sort(added.begin(), added.end());
+  std::vector<std::array<std::uint32_t, 3>> keys;
+  keys.reserve(removed.size() + added.size());
+  for (const FaceRecords* records : {&removed, &added})
+    for (const FaceRecord& r : *records) keys.push_back(r.key);
+  parallel_sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  // The non-manifold triples among them counted again; the faces edited in one pass.
+  const auto nonmanifold_among_keys = [&] {
+    return reduce_in_blocks(
+        keys.size(), std::size_t{0},
+        [&](std::size_t i) -> std::size_t { return records_of(faces_, keys[i]).size() > 2; },
+        std::plus<>());
+  };
+  nonmanifold_ -= nonmanifold_among_keys();
+  FaceRecords kept(faces_.size() - removed.size());
+  const auto kept_end = std::set_difference(faces_.begin(), faces_.end(), removed.begin(),
+                                            removed.end(), kept.begin());
+  if (kept_end != kept.end())
+    throw InternalError("BoundaryFaces: the faces kept do not hold the changed tets' old faces");
+  faces_.resize(kept.size() + added.size());
+  std::merge(kept.begin(), kept.end(), added.begin(), added.end(), faces_.begin());
+  nonmanifold_ += nonmanifold_among_keys();
+  // The input triangles on those triples judged again.
+  for_each_index(keys.size(), [&](std::size_t i) {  // one key's triangles each: distinct writes
+    const auto range = std::equal_range(
+        triangle_keys_.begin(), triangle_keys_.end(), std::pair{keys[i], std::uint32_t{0}},
+        [](const auto& a, const auto& b) { return a.first < b.first; });
+    for (auto it = range.first; it != range.second; ++it)
+      verdict_[it->second] = boundary_verdict(surface_.triangles[it->second], faces_, mesh);
+  });
 }
 
 double on_surface_distance(const SurfaceMesh& surface, const ShellCheckOptions& options) {

@@ -10,9 +10,11 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <utility>
 #include <vector>
 
 #include "core/base/surface_mesh.h"
+#include "core/base/tet_faces.h"
 #include "core/base/tet_mesh.h"
 #include "core/validity/shell_checks.h"
 #include "core/validity/tet_intersections.h"
@@ -39,6 +41,34 @@ void count_volumes(const TetMesh& mesh, const ShellCheckOptions& options, ShellC
 /// \pre every tet index is in range.
 void check_boundary_faces(const SurfaceMesh& surface, const TetMesh& mesh,
                           const ShellCheckOptions& options, ShellCheckResult& result);
+
+/// check_boundary_faces() over a sequence of meshes of one tet count that change a few tets at a
+/// time (ShellChecker): the sorted faces, a verdict per input triangle and the non-manifold
+/// count are kept, and a call sorts, looks up and counts again only the faces of the tets whose
+/// corners changed, and the input triangles and vertex triples those faces had or have. The
+/// results are check_boundary_faces()'s.
+class BoundaryFaces {
+ public:
+  /// `surface` must outlive the object.
+  explicit BoundaryFaces(const SurfaceMesh& surface) : surface_(surface) {}
+
+  /// Brings the state to `mesh` and adds its counts and lists to `result`: from scratch at the
+  /// first call, when the tet count changed, or when more than 1 / kRebuildShare of the tets
+  /// changed. \pre every tet index is in range.
+  void check(const TetMesh& mesh, const ShellCheckOptions& options, ShellCheckResult& result);
+
+ private:
+  static constexpr std::size_t kRebuildShare = 32;
+  void rebuild(const TetMesh& mesh);
+  void update(const TetMesh& mesh, const std::vector<std::uint32_t>& changed);
+
+  const SurfaceMesh& surface_;
+  std::vector<Tet> tets_;              // the tets the state is of
+  FaceRecords faces_;                  // their faces, sorted
+  std::vector<std::uint8_t> verdict_;  // per input triangle
+  std::size_t nonmanifold_ = 0;        // vertex triples of more than two faces
+  std::vector<std::pair<std::array<std::uint32_t, 3>, std::uint32_t>> triangle_keys_;  // sorted
+};
 
 /// The distance (world units) within which a point is on `surface`: options.on_surface_tolerance
 /// times the diagonal of its bounding box.

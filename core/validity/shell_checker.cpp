@@ -8,8 +8,9 @@
 // the prisms that changed and runs the narrow phase (tet_intersections.h) for the "dirty" prisms —
 // changed since the previous call, or offending in it — only; every other pair is trusted: both its
 // tets are where they were when the pair was last tested, and it passed. The element checks are
-// check_shell()'s (check_steps.h), with two caches: the boundary faces, which depend on the tets'
-// vertex indices only, and whether each distinct inner point position is outside.
+// check_shell()'s (check_steps.h), with two caches: the boundary faces (BoundaryFaces: those of the
+// tets whose vertex indices changed are looked up again), and whether each distinct inner point
+// position is outside.
 #include <algorithm>
 #include <array>
 #include <map>
@@ -61,16 +62,6 @@ std::vector<std::uint32_t> prism_starts(const TetMesh& mesh, std::size_t n_faces
   return first;
 }
 
-void copy_face_counts(const ShellCheckResult& from, ShellCheckResult& to) {
-  to.missing_triangles = from.missing_triangles;
-  to.first_missing_triangles = from.first_missing_triangles;
-  to.shared_triangles = from.shared_triangles;
-  to.first_shared_triangles = from.first_shared_triangles;
-  to.misoriented_triangles = from.misoriented_triangles;
-  to.first_misoriented_triangles = from.first_misoriented_triangles;
-  to.nonmanifold_faces = from.nonmanifold_faces;
-}
-
 }  // namespace
 
 struct ShellChecker::Impl {
@@ -80,7 +71,8 @@ struct ShellChecker::Impl {
         per_prism(3 * static_cast<std::uint32_t>(o.layers)),
         inside(s, on_surface_distance(s, o)),
         tet_count(s.triangles.size(), 0),
-        offended(s.triangles.size(), 0) {
+        offended(s.triangles.size(), 0),
+        faces(s) {
     if (o.layers < 1 || o.layers > kMaxLayers ||
         std::uint64_t(per_prism) * s.triangles.size() > UINT32_MAX)
       throw InputError("ShellChecker: " + std::to_string(o.layers) + " layers of " +
@@ -97,11 +89,9 @@ struct ShellChecker::Impl {
   std::unique_ptr<BroadPhase> phase;    // from the first call on
   std::vector<std::uint8_t> tet_count;  // per prism: its tets in `phase`
   std::vector<std::uint8_t> offended;   // per prism, in the previous call
+  BoundaryFaces faces;                  // the boundary faces of the previous call's tets
   std::map<std::array<double, 3>, bool> outside_cache;
-  std::vector<Tet> faces_tets;  // the tets of the last boundary face check, and its result
-  ShellCheckResult faces_result;
 
-  void check_faces(const TetMesh& mesh, ShellCheckResult& result);
   void check_inner_points(const TetMesh& mesh, const std::vector<std::uint32_t>& inner_points,
                           ShellCheckResult& result);
   std::vector<std::uint8_t> changed_prisms(const TetMesh& mesh,
@@ -117,16 +107,6 @@ struct ShellChecker::Impl {
   void check_intersections(const TetMesh& mesh, const std::vector<std::uint32_t>& first,
                            const std::vector<std::uint32_t>& dirty, ShellCheckResult& result);
 };
-
-// Boundary faces, checked again only when the tets' vertex indices changed.
-void ShellChecker::Impl::check_faces(const TetMesh& mesh, ShellCheckResult& result) {
-  if (mesh.tets != faces_tets) {
-    faces_result = ShellCheckResult{};
-    check_boundary_faces(surface, mesh, options, faces_result);
-    faces_tets = mesh.tets;
-  }
-  copy_face_counts(faces_result, result);
-}
 
 // Inner points inside, each position tested once over all calls.
 void ShellChecker::Impl::check_inner_points(const TetMesh& mesh,
@@ -261,7 +241,7 @@ ShellCheckResult ShellChecker::check(const TetMesh& mesh) {
   ShellCheckResult result;
   const std::vector<std::uint32_t> inner_points =
       check_elements(m.surface, mesh, m.options, result);
-  m.check_faces(mesh, result);
+  m.faces.check(mesh, m.options, result);
   m.check_inner_points(mesh, inner_points, result);
   if (m.options.check_overlaps || m.options.check_leaks) {
     const std::vector<std::uint32_t> first =

@@ -17,6 +17,7 @@
 #include "assets/shapes.h"
 #include "core/assemble/assemble.h"
 #include "core/base/errors.h"
+#include "core/validity/check_steps.h"
 #include "core/validity/shell_checks.h"
 #include "core/validity/tet_predicates.h"
 
@@ -753,6 +754,94 @@ TEST(ShellChecker, AgreesWithCheckShellAlongASequenceOfMoves) {
     if (!full.valid()) ++invalid_steps;
   }
   EXPECT_GT(invalid_steps, 5u);  // the sequence did break things
+}
+
+TEST(BoundaryFaces, UpdatesAgreeWithACountOfEveryFaceAlongASequenceOfEdits) {
+  // A valid sphere shell whose tets are edited a few at a time, the tet count kept: corners
+  // swapped (misoriented faces), rotated (the same faces, other records), a tet replaced by a
+  // copy of another (shared, missing and non-manifold faces), tets restored. One BoundaryFaces
+  // sees every step; each is counted from scratch here, face by face.
+  const SurfaceMesh s = make_shape("sphere", 2);
+  const TetMesh valid = scaled_shell(s, 0.6);
+  const std::size_t T = valid.tets.size();
+  ShellCheckOptions options;
+  options.max_listed = std::numeric_limits<std::size_t>::max();
+  BoundaryFaces faces(s);
+  TetMesh m = valid;
+  std::mt19937 rng(11);
+  std::size_t broken_steps = 0;
+  for (int step = 0; step < 40; ++step) {
+    SCOPED_TRACE("step " + std::to_string(step));
+    // Step 20 edits half the tets' worth (more than BoundaryFaces updates: it starts again).
+    const int edits = step == 0 ? 0 : step == 20 ? int(T / 2) : 1 + int(rng() % 4);
+    for (int e = 0; e < edits; ++e) {
+      const std::size_t t = rng() % T;
+      Tet& tet = m.tets[t];
+      switch (rng() % 4) {
+        case 0:
+          std::swap(tet[0], tet[1]);
+          break;
+        case 1:
+          tet = {tet[1], tet[2], tet[0], tet[3]};
+          break;  // an even permutation
+        case 2:
+          tet = valid.tets[rng() % T];
+          break;
+        default:
+          tet = valid.tets[t];
+          break;
+      }
+    }
+    // The reference: every face by its vertex triple, with its outward cycle (the face opposite
+    // an even corner in corner order, opposite an odd one reversed).
+    std::map<std::array<std::uint32_t, 3>, std::vector<std::array<std::uint32_t, 3>>> cycles;
+    for (const Tet& tet : m.tets)
+      for (int k = 0; k < 4; ++k) {
+        std::array<std::uint32_t, 3> c{};
+        for (int i = 0, j = 0; i < 4; ++i)
+          if (i != k) c[std::size_t(j++)] = tet[std::size_t(i)];
+        if (k % 2) std::swap(c[1], c[2]);
+        std::array<std::uint32_t, 3> key = c;
+        std::sort(key.begin(), key.end());
+        cycles[key].push_back(c);
+      }
+    std::size_t nonmanifold = 0;
+    for (const auto& [key, list] : cycles) nonmanifold += list.size() > 2;
+    std::vector<std::uint32_t> missing, shared, misoriented;
+    for (std::uint32_t f = 0; f < s.triangles.size(); ++f) {
+      const Triangle& tri = s.triangles[f];
+      std::array<std::uint32_t, 3> key = {tri[0], tri[1], tri[2]};
+      std::sort(key.begin(), key.end());
+      const auto it = cycles.find(key);
+      if (it == cycles.end()) {
+        missing.push_back(f);
+      } else if (it->second.size() > 1) {
+        shared.push_back(f);
+      } else {
+        const auto& c = it->second[0];
+        bool same = false;
+        for (int r = 0; r < 3; ++r)
+          same = same || (c[0] == tri[r] && c[1] == tri[(r + 1) % 3] && c[2] == tri[(r + 2) % 3]);
+        if (!same) misoriented.push_back(f);
+      }
+    }
+    ShellCheckResult r;
+    faces.check(m, options, r);
+    EXPECT_EQ(r.first_missing_triangles, missing);
+    EXPECT_EQ(r.first_shared_triangles, shared);
+    EXPECT_EQ(r.first_misoriented_triangles, misoriented);
+    EXPECT_EQ(r.missing_triangles, missing.size());
+    EXPECT_EQ(r.shared_triangles, shared.size());
+    EXPECT_EQ(r.misoriented_triangles, misoriented.size());
+    EXPECT_EQ(r.nonmanifold_faces, nonmanifold);
+    if (!missing.empty() || !shared.empty() || !misoriented.empty() || nonmanifold) ++broken_steps;
+  }
+  EXPECT_GT(broken_steps, 20u);  // the edits did break things
+  // Back to the valid shell: nothing left over from the edits.
+  ShellCheckResult r;
+  faces.check(valid, options, r);
+  EXPECT_EQ(r.missing_triangles + r.shared_triangles + r.misoriented_triangles, 0u);
+  EXPECT_EQ(r.nonmanifold_faces, 0u);
 }
 
 TEST(ShellChecker, VolumesOnlyCheckFindsTheInvertedTets) {
