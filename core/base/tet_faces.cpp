@@ -17,11 +17,6 @@ FaceRecords sorted_tet_faces(const TetMesh& mesh) {
   const std::size_t span = std::max<std::size_t>(256, (mesh.points.size() + 4095) / 4096);
   const std::size_t n_blocks = (n_tets + block - 1) / block;
   const std::size_t n_ranges = std::max<std::size_t>(1, (mesh.points.size() + span - 1) / span);
-  const auto face_key = [&](std::size_t t, int k) {
-    const Tet& v = mesh.tets[t];
-    const int* f = kTetOutwardFace[k];
-    return sorted3(v[f[0]], v[f[1]], v[f[2]]);
-  };
   const auto for_each_block = [&](const auto& body) {
     for_each_index(
         n_blocks,
@@ -48,9 +43,8 @@ FaceRecords sorted_tet_faces(const TetMesh& mesh) {
   FaceRecords faces(4 * n_tets);  // every element written below
   for_each_block([&](std::size_t b, std::size_t t) {
     for (int k = 0; k < 4; ++k) {
-      const std::array<std::uint32_t, 3> key = face_key(t, k);
-      faces[slot[b * n_ranges + key[0] / span]++] = {key, static_cast<std::uint32_t>(t),
-                                                     static_cast<std::uint8_t>(k)};
+      const FaceRecord face = face_of_tet(mesh.tets[t], static_cast<std::uint32_t>(t), k);
+      faces[slot[b * n_ranges + face.key[0] / span]++] = face;
     }
   });
   // 3. Each range sorts its faces by smallest vertex (a counting sort), then each vertex's few

@@ -38,6 +38,12 @@ inline std::array<std::uint32_t, 3> sorted3(std::uint32_t a, std::uint32_t b, st
   return k;
 }
 
+/// The face of tet `t` (corners `v`) opposite its corner k.
+inline FaceRecord face_of_tet(const Tet& v, std::uint32_t t, int k) {
+  const int* f = kTetOutwardFace[k];
+  return {sorted3(v[f[0]], v[f[1]], v[f[2]]), t, static_cast<std::uint8_t>(k)};
+}
+
 /// The 4T faces of the tets in FaceRecord order (equal faces next to each other). Every step runs
 /// in parallel over fixed blocks; since FaceRecord's order is total, the result is the same for
 /// any thread count.

@@ -50,12 +50,6 @@ bool same_cycle(const std::array<std::uint32_t, 3>& x, const Triangle& y) {
   return false;
 }
 
-// The face of tet `t` (corners `v`) opposite corner k.
-FaceRecord face_record(const Tet& v, std::uint32_t t, int k) {
-  const int* f = kTetOutwardFace[k];
-  return {sorted3(v[f[0]], v[f[1]], v[f[2]]), t, static_cast<std::uint8_t>(k)};
-}
-
 // The records of `faces` (sorted) on the vertex triple `key`.
 struct RecordRange {
   FaceRecords::const_iterator begin, end;
@@ -135,17 +129,10 @@ void check_boundary_faces(const SurfaceMesh& surface, const TetMesh& mesh,
 
 void BoundaryFaces::check(const TetMesh& mesh, const ShellCheckOptions& options,
                           ShellCheckResult& result) {
-  std::vector<std::uint32_t> changed;
   if (mesh.tets.size() == tets_.size() && verdict_.size() == surface_.triangles.size()) {
-    std::vector<std::uint8_t> differs(tets_.size(), 0);
-    for_each_chunk(
-        tets_.size(),
-        [&](std::size_t begin, std::size_t end) {
-          for (std::size_t t = begin; t != end; ++t) differs[t] = mesh.tets[t] != tets_[t];
-        },
-        1 << 14);
-    for (std::size_t t = 0; t < differs.size(); ++t)
-      if (differs[t]) changed.push_back(static_cast<std::uint32_t>(t));
+    std::vector<std::uint32_t> changed;
+    for (std::uint32_t t = 0; t < tets_.size(); ++t)
+      if (mesh.tets[t] != tets_[t]) changed.push_back(t);
     if (changed.size() * kRebuildShare <= tets_.size())
       update(mesh, changed);
     else
@@ -204,8 +191,8 @@ void BoundaryFaces::update(const TetMesh& mesh, const std::vector<std::uint32_t>
   for (std::size_t i = 0; i < changed.size(); ++i) {
     const std::uint32_t t = changed[i];
     for (int k = 0; k < 4; ++k) {
-      removed[4 * i + k] = face_record(tets_[t], t, k);
-      added[4 * i + k] = face_record(mesh.tets[t], t, k);
+      removed[4 * i + k] = face_of_tet(tets_[t], t, k);
+      added[4 * i + k] = face_of_tet(mesh.tets[t], t, k);
     }
     tets_[t] = mesh.tets[t];
   }
