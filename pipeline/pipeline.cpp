@@ -666,6 +666,8 @@ std::string report_json(const ShellResult& r, const ReportFiles& files, double r
                    {"faces", p.faces},
                    {"components", r.input.stats.components},
                    {"holes_closed", p.holes_closed},
+                   {"dropped_parts", p.dropped_parts},
+                   {"collapsed_edges", p.collapsed_edges},
                    {"distance_max", p.distance_max},
                    {"distance_mean", p.distance_mean},
                    {"input_distance_max", p.input_distance_max},

@@ -7,11 +7,13 @@
 #include <openvdb/tools/VolumeToMesh.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 #include <map>
+#include <set>
 #include <utility>
 #include <vector>
 
@@ -20,6 +22,8 @@
 #include "core/base/memory_budget.h"
 #include "core/base/timer.h"
 #include "core/read/load_surface.h"
+#include "core/read/tidy_surface.h"
+#include "core/validity/shell_checks.h"
 #include "vdb_ops/fields/fields_internal.h"
 
 namespace vdb_shell {
@@ -27,6 +31,51 @@ namespace {
 
 using fields_detail::format_double;
 using fields_detail::IndexMesh;
+
+/// Edges of the repaired surface shorter than this many voxels are collapsed
+/// (tidy_contoured_surface()): a contour's vertices crowded onto a grid point.
+constexpr double kTidyEdge = 0.1;
+
+/// The clean repaired surface `soup` (voxels of side h) without its specks (parts of less than a
+/// voxel's volume) and slivers (tidy_contoured_surface()).
+/// Where the edits make faces cross (a collapse in a gap thinner than the edit), the points in
+/// the voxels around the crossing faces' corners are left as they were and the rest is tidied
+/// again; after three such rounds, or should a defect of another kind appear, `soup` as it was.
+PolygonSoup without_slivers(const PolygonSoup& soup, double h, TidyCounts& counts) {
+  TidyOptions options;
+  options.min_edge = kTidyEdge * h;
+  options.min_part_volume = h * h * h;
+  std::set<std::array<long, 3>> near;  // voxels around the crossings so far
+  const auto voxel = [&](const Vec3d& p) {
+    return std::array<long, 3>{static_cast<long>(std::floor(p.x / h)),
+                               static_cast<long>(std::floor(p.y / h)),
+                               static_cast<long>(std::floor(p.z / h))};
+  };
+  for (int round = 0; round < 4; ++round) {
+    PolygonSoup tidied = tidy_contoured_surface(soup, options, &counts);
+    if (find_surface_problems(tidied).empty()) return tidied;
+    if (round == 3) break;
+    SurfaceMesh mesh;
+    mesh.points = tidied.points;
+    for (const std::vector<std::int64_t>& f : tidied.polygons)
+      mesh.triangles.push_back({static_cast<std::uint32_t>(f[0]), static_cast<std::uint32_t>(f[1]),
+                                static_cast<std::uint32_t>(f[2])});
+    const std::size_t known = near.size();
+    for (const auto& pair : surface_self_intersections(mesh, SIZE_MAX))
+      for (const std::uint32_t f : pair)
+        for (const std::uint32_t v : mesh.triangles[f]) {
+          const std::array<long, 3> c = voxel(mesh.points[v]);
+          for (int d = 0; d < 27; ++d)
+            near.insert({c[0] + d % 3 - 1, c[1] + d / 3 % 3 - 1, c[2] + d / 9 - 1});
+        }
+    if (near.size() == known) break;  // not crossings, or none new
+    options.frozen.assign(soup.points.size(), 0);
+    for (std::size_t i = 0; i < soup.points.size(); ++i)
+      options.frozen[i] = near.count(voxel(soup.points[i])) != 0;
+  }
+  counts = TidyCounts{};
+  return soup;
+}
 
 /// Squared Euclidean distance transform of one line (Felzenszwalb and Huttenlocher's lower
 /// envelope of parabolas): f holds 0 at the sites and kFar elsewhere on entry, the squared
@@ -391,6 +440,7 @@ PolygonSoup repair_surface(const PolygonSoup& input, const RepairOptions& option
   // the next of a few nearby iso-values is tried, then the same at half, a quarter of the
   // adaptivity and at 0, and then all of it once the distance is smoothed.
   fields_detail::VolumeMesh meshed;
+  TidyCounts tidy;
   FloatGrid::Ptr sdf;
   bool clean = false;
   std::vector<double> adaptivities = {options.adaptivity};
@@ -402,8 +452,10 @@ PolygonSoup repair_surface(const PolygonSoup& input, const RepairOptions& option
     for (const double adaptivity : adaptivities) {
       for (const double iso : {1e-3, 0.0137, 0.0291, -0.0113, 0.0457}) {
         meshed = fields_detail::mesh_volume(*sdf, iso * h, adaptivity);  // facing outward
-        clean = find_surface_problems(meshed.soup).empty();
-        if (clean) break;
+        if (!find_surface_problems(meshed.soup).empty()) continue;
+        clean = true;
+        meshed.soup = without_slivers(meshed.soup, h, tidy);
+        break;
       }
       if (clean) break;
     }
@@ -422,6 +474,8 @@ PolygonSoup repair_surface(const PolygonSoup& input, const RepairOptions& option
   report.closing = options.closing;
   report.input_faces = input.polygons.size();
   report.faces = soup.polygons.size();
+  report.dropped_parts = tidy.dropped_parts;
+  report.collapsed_edges = tidy.collapsed;
   report.holes_closed = boundary_loops(input);
   for (const Vec3d& p : soup.points) {
     const double d = to_input.at(p);
@@ -431,11 +485,9 @@ PolygonSoup repair_surface(const PolygonSoup& input, const RepairOptions& option
   IndexMesh repaired;
   for (const Vec3d& p : soup.points)
     repaired.points.emplace_back(xform->worldToIndex(openvdb::Vec3d(p.x, p.y, p.z)));
-  for (const openvdb::Vec3I& t : meshed.triangles) repaired.triangles.push_back(t);
-  for (const openvdb::Vec4I& q : meshed.quads) {
-    repaired.triangles.emplace_back(q[0], q[1], q[2]);
-    repaired.triangles.emplace_back(q[0], q[2], q[3]);
-  }
+  for (const std::vector<std::int64_t>& f : soup.polygons)
+    for (std::size_t k = 1; k + 1 < f.size(); ++k)
+      repaired.triangles.emplace_back(f[0], f[k], f[k + 1]);
   const MeshDistance to_repaired(repaired, *xform, band);
   const Sampler side{*sdf};
   // Whether p lies on the enclosed solid: within 4.5 voxels of a voxel more than a voxel deep in

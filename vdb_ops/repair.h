@@ -11,9 +11,10 @@
 // the band), thin parts the erosion would remove (an open sheet) are kept as slabs about
 // `closing` voxels thick, and the distance is meshed with volumeToMesh (at an iso-value just off
 // zero, an adaptive mesh mended around its defects; should the mesh still have one, at a nearby
-// iso-value, at a lower adaptivity, then all of that after smoothing the distance once). So the
-// repaired surface follows a closed input within about a fifth of a voxel and spans a hole with
-// a smooth cap.
+// iso-value, at a lower adaptivity, then all of that after smoothing the distance once), then
+// tidied: parts enclosing less than a voxel's volume dropped, edges shorter than a tenth of a
+// voxel collapsed (tidy_surface.h), so that no prism stands on a sliver. So the repaired surface
+// follows a closed input within about a fifth of a voxel and spans a hole with a smooth cap.
 #pragma once
 
 #include <cstddef>
@@ -40,6 +41,10 @@ struct RepairReport {
   std::size_t input_faces = 0;   ///< polygons of the input
   std::size_t faces = 0;         ///< triangles and quads of the repaired surface
   std::size_t holes_closed = 0;  ///< boundary loops of the input
+  /// Specks and slivers of the contoured surface tidied away (tidy_surface.h): parts enclosing
+  /// less than a voxel's volume dropped, edges shorter than a tenth of a voxel collapsed.
+  std::size_t dropped_parts = 0;
+  std::size_t collapsed_edges = 0;
   double distance_max = 0.0;     ///< repaired surface -> nearest input triangle
   double distance_mean = 0.0;
   /// Input vertices -> repaired surface, except those swallowed: on the enclosed solid (below)
