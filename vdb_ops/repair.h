@@ -45,7 +45,7 @@ struct RepairReport {
   /// less than a voxel's volume dropped, edges shorter than a tenth of a voxel collapsed.
   std::size_t dropped_parts = 0;
   std::size_t collapsed_edges = 0;
-  double distance_max = 0.0;     ///< repaired surface -> nearest input triangle
+  double distance_max = 0.0;  ///< repaired surface -> nearest input triangle
   double distance_mean = 0.0;
   /// Input vertices -> repaired surface, except those swallowed: on the enclosed solid (below)
   /// and inside the repaired surface more than a voxel from it (overlapping parts, closed gaps).

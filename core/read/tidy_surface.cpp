@@ -25,8 +25,11 @@ constexpr double kFairQuality = 0.1;
 class Editor {
  public:
   Editor(std::vector<Vec3d> points, std::vector<Triangle> triangles, double min_edge)
-      : points_(std::move(points)), tris_(std::move(triangles)), alive_(tris_.size(), 1),
-        faces_of_(points_.size()), min_edge2_(min_edge * min_edge) {
+      : points_(std::move(points)),
+        tris_(std::move(triangles)),
+        alive_(tris_.size(), 1),
+        faces_of_(points_.size()),
+        min_edge2_(min_edge * min_edge) {
     for (std::uint32_t f = 0; f < tris_.size(); ++f)
       for (const std::uint32_t v : tris_[f]) faces_of_[v].push_back(f);
   }

@@ -382,8 +382,8 @@ TEST(Repair, TheRepairedSurfaceHasNoSliversOrSpecks) {
     for (int k = 1; k < 3; ++k) part[root(t[k])] = root(t[0]);
   std::map<std::size_t, double> volume;
   for (const Triangle& t : mesh.triangles)
-    volume[root(t[0])] += tet_volume({0, 0, 0}, mesh.points[t[0]], mesh.points[t[1]],
-                                     mesh.points[t[2]]);
+    volume[root(t[0])] +=
+        tet_volume({0, 0, 0}, mesh.points[t[0]], mesh.points[t[1]], mesh.points[t[2]]);
   for (const auto& [at, v] : volume) EXPECT_GE(std::abs(v), r.h * r.h * r.h) << at;
   ShellOptions options;
   options.fields.resolution = 64;
