@@ -10,6 +10,7 @@
 #include <tuple>
 #include <utility>
 
+#include "core/base/disjoint_sets.h"
 #include "core/base/errors.h"
 #include "core/base/parallel.h"
 #include "core/read/format_reader.h"
@@ -18,26 +19,6 @@
 
 namespace vdb_shell {
 namespace {
-
-/// Union-find over dense indices.
-class DisjointSets {
- public:
-  explicit DisjointSets(std::size_t n) : parent_(n) {
-    std::iota(parent_.begin(), parent_.end(), std::size_t{0});
-  }
-  std::size_t find(std::size_t i) {
-    while (parent_[i] != i) i = parent_[i] = parent_[parent_[i]];
-    return i;
-  }
-  void unite(std::size_t a, std::size_t b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) parent_[std::max(a, b)] = std::min(a, b);  // smallest index is the root
-  }
-
- private:
-  std::vector<std::size_t> parent_;
-};
 
 std::string fmt_point(const Vec3d& p) {
   char buf[96];

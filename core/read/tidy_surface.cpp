@@ -5,11 +5,11 @@
 #include <cmath>
 #include <cstdint>
 #include <iterator>
-#include <numeric>
 #include <tuple>
 #include <utility>
 #include <vector>
 
+#include "core/base/disjoint_sets.h"
 #include "core/base/surface_mesh.h"
 
 namespace vdb_shell {
@@ -152,22 +152,14 @@ PolygonSoup tidy_contoured_surface(const PolygonSoup& soup, const TidyOptions& o
     return v < options.frozen.size() && options.frozen[v] != 0;
   };
   // The parts (points joined by polygons) and six times the volume each encloses.
-  std::vector<std::uint32_t> part(p.size());
-  std::iota(part.begin(), part.end(), 0u);
-  const auto root = [&](std::uint32_t v) {
-    while (part[v] != v) v = part[v] = part[part[v]];
-    return v;
-  };
+  DisjointSets parts(p.size());
   for (const std::vector<std::int64_t>& poly : soup.polygons)
-    for (std::size_t k = 1; k < poly.size(); ++k) {
-      const std::uint32_t a = root(static_cast<std::uint32_t>(poly[0])),
-                          b = root(static_cast<std::uint32_t>(poly[k]));
-      part[std::max(a, b)] = std::min(a, b);
-    }
+    for (std::size_t k = 1; k < poly.size(); ++k)
+      parts.unite(static_cast<std::size_t>(poly[0]), static_cast<std::size_t>(poly[k]));
   std::vector<double> volume6(p.size(), 0.0);  // per root
   std::vector<char> used(p.size(), 0);         // per root
   for (const std::vector<std::int64_t>& poly : soup.polygons) {
-    const std::uint32_t r = root(static_cast<std::uint32_t>(poly[0]));
+    const std::size_t r = parts.find(static_cast<std::size_t>(poly[0]));
     used[r] = 1;
     for (std::size_t k = 1; k + 1 < poly.size(); ++k)
       volume6[r] += dot(p[poly[0]], cross(p[poly[k]], p[poly[k + 1]]));
@@ -183,7 +175,7 @@ PolygonSoup tidy_contoured_surface(const PolygonSoup& soup, const TidyOptions& o
   tris.reserve(2 * soup.polygons.size());
   for (const std::vector<std::int64_t>& poly : soup.polygons) {
     std::vector<std::uint32_t> v(poly.begin(), poly.end());
-    if (dropped[root(v[0])]) continue;
+    if (dropped[parts.find(v[0])]) continue;
     if (v.size() == 4) {
       // Along the diagonal whose pair of triangles has the better worst one.
       const double q02 = std::min(triangle_quality(p[v[0]], p[v[1]], p[v[2]]),
